@@ -1,0 +1,1 @@
+"""The ``lpbounds`` command line (one module per subcommand)."""

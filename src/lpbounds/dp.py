@@ -1,0 +1,467 @@
+r"""Exact dynamic programming: value, policy and modified policy iteration, policy
+evaluation, greedy policies and the Porteus bounds (paper Sections 2 and 3.3).
+
+Every function takes either a :class:`~lpbounds.mdp.FiniteMDP` or a
+:class:`~lpbounds.rows.BellmanRows` system (an MDP whose actions at ``i`` are the rows
+of ``i``), so the same code computes ``V*`` and the exact, solver-free counterparts of
+the LPs (RLP's least feasible point is the fixed point of its rows, Fact 1 in
+:mod:`lpbounds.rows`).
+
+Stopping rule and error bound
+-----------------------------
+The solvers stop when the Bellman residual of the vector they return,
+``||T V - V||_inf``, is at most ``tol`` (default ``DP_RTOL * max|R| / (1 - lambda)``),
+and report that residual, measured on the returned vector. It implies
+
+* ``||V - V*||_inf <= residual / (1 - lambda)`` (reported as ``error_bound``), and
+* ``||T V - V*||_inf <= lambda / (1 - lambda) * residual`` for one more application of T.
+
+Value iteration and MPI use the Porteus/MacQueen extrapolation: after a sweep
+``V' = T V`` with ``r = V' - V``, the constant ``lambda / (1 - lambda) * (min r + max r) / 2``
+is added to ``V'``. A constant shift does not change greedy policies and
+``T(V + c) = T V + lambda c``, so the shift only removes the slowest (constant) error
+mode; the residual of the shifted vector is at most ``lambda * span(r) / 2``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .errors import ConvergenceError, ValidationError
+from .mdp import FiniteMDP
+from .rows import BellmanRows
+from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale
+
+__all__ = [
+    "DPResult",
+    "PolicyEvaluation",
+    "PorteusBounds",
+    "bellman_residual",
+    "evaluate_policy",
+    "exact_rows",
+    "greedy_policy",
+    "porteus_bounds",
+    "solve_exact",
+]
+
+Model = FiniteMDP | BellmanRows
+Method = Literal["mpi", "vi", "pi"]
+Callback = Callable[[int, float], None]
+
+
+def exact_rows(model: Model) -> BellmanRows:
+    """The Bellman rows of ``model`` (cached on a FiniteMDP; the rows themselves otherwise)."""
+    if isinstance(model, BellmanRows):
+        return model
+    if not isinstance(model, FiniteMDP):
+        raise ValidationError(f"expected a FiniteMDP or BellmanRows; got {type(model).__name__}")
+    cached = model.__dict__.get("_exact_rows")
+    if cached is None:
+        cached = BellmanRows.from_mdp(model)
+        model.__dict__["_exact_rows"] = cached
+    return cached
+
+
+def _default_tol(rows: BellmanRows, tol: float | None) -> float:
+    if tol is not None:
+        if not (tol > 0 and np.isfinite(tol)):
+            raise ValidationError(f"tol must be a positive number; got {tol}")
+        return float(tol)
+    return DP_RTOL * dp_scale(float(np.abs(rows.reward).max(initial=0.0)), rows.discount)
+
+
+def _policy_out(model: Model, rows: BellmanRows, policy_rows: np.ndarray) -> np.ndarray:
+    """Actions per state for an MDP, row indices for a row system."""
+    if isinstance(model, FiniteMDP):
+        return rows.action[policy_rows].astype(np.int64)
+    return policy_rows
+
+
+def _policy_rows(model: Model, rows: BellmanRows, policy: Any) -> np.ndarray:
+    pol = np.asarray(policy)
+    if pol.shape != (rows.n_vars,) or not np.issubdtype(pol.dtype, np.integer):
+        raise ValidationError(f"a policy must be {rows.n_vars} integers; got {pol.shape} {pol.dtype}")
+    if isinstance(model, FiniteMDP):
+        if (pol < 0).any() or (pol >= model.n_actions).any():
+            x = int(np.flatnonzero((pol < 0) | (pol >= model.n_actions))[0])
+            raise ValidationError(f"policy[{x}] = {int(pol[x])} is not an action index")
+        assert rows.pair_row is not None
+        sel = rows.pair_row[np.arange(rows.n_vars), pol]
+        if (sel < 0).any():
+            x = int(np.flatnonzero(sel < 0)[0])
+            raise ValidationError(f"policy[{x}] = {int(pol[x])} is not allowed in state {x}")
+        return sel
+    bad = (pol < rows.indptr[:-1]) | (pol >= rows.indptr[1:])
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ValidationError(f"policy[{i}] = {int(pol[i])} is not a row of owner {i}")
+    return pol.astype(np.int64)
+
+
+# ---------------------------------------------------------------------- results
+@dataclass
+class DPResult:
+    """Outcome of :func:`solve_exact`.
+
+    Attributes
+    ----------
+    values : ndarray
+        ``V``, within ``error_bound`` of ``V*`` in the max norm.
+    policy : ndarray of int
+        A policy greedy w.r.t. ``values`` (first maximising action; the exact maximiser
+        of the returned ``values``): actions per state for an MDP, rows per owner for
+        a row system.
+    policy_rows : ndarray of int
+        The row chosen at each owner.
+    residual : float
+        ``||T values - values||_inf``, measured on the returned vector.
+    error_bound : float
+        ``residual / (1 - discount)``, a bound on ``||values - V*||_inf``.
+    tol : float
+        The stopping tolerance on ``residual``.
+    iterations : int
+        Improvement steps (Bellman sweeps with a max) performed.
+    sweeps : int
+        All sweeps over the rows, improvement and evaluation.
+    seconds : float
+    method : str
+    converged : bool
+    history : list of float
+        The residual at each improvement step.
+    """
+
+    values: np.ndarray
+    policy: np.ndarray
+    policy_rows: np.ndarray
+    residual: float
+    error_bound: float
+    tol: float
+    iterations: int
+    sweeps: int
+    seconds: float
+    method: str
+    converged: bool
+    history: list[float] = field(default_factory=list)
+
+
+@dataclass
+class PolicyEvaluation:
+    """Outcome of :func:`evaluate_policy`: ``V_pi`` with its residual and error bound."""
+
+    values: np.ndarray
+    residual: float
+    error_bound: float
+    method: str
+    sweeps: int
+    seconds: float
+
+
+@dataclass
+class PorteusBounds:
+    r"""The Porteus (1975) bounds from a candidate value vector ``V`` (paper Sec. 3.3).
+
+    With ``alpha = T V - V`` and ``pi`` greedy w.r.t. ``V``:
+    ``lower_paper = V + min(alpha) / (1 - lambda) <= lower = T V + lambda/(1-lambda) min(alpha)
+    <= V_pi <= V* <= upper = T V + lambda/(1-lambda) max(alpha)``.
+    """
+
+    lower: np.ndarray
+    lower_paper: np.ndarray
+    upper: np.ndarray
+    policy: np.ndarray
+    alpha_min: float
+    alpha_max: float
+
+
+# ---------------------------------------------------------------------- solvers
+def solve_exact(
+    model: Model,
+    method: Method = "mpi",
+    *,
+    tol: float | None = None,
+    max_iter: int = 100_000,
+    eval_sweeps: int = 20,
+    extrapolate: bool = True,
+    initial: Any = None,
+    evaluation: Literal["auto", "direct", "iterative"] = "auto",
+    callback: Callback | None = None,
+    raise_on_failure: bool = True,
+) -> DPResult:
+    """Solve Bellman's equation (eq. 3) to a stated residual.
+
+    Parameters
+    ----------
+    model : FiniteMDP or BellmanRows
+    method : {"mpi", "vi", "pi"}
+        Modified policy iteration (default: ``eval_sweeps`` evaluation sweeps of the
+        greedy policy after each improvement), value iteration, or policy iteration
+        (exact evaluation, see ``evaluation``; a policy is kept while it is tied
+        within :data:`~lpbounds.tolerances.GREEDY_TIE_RTOL`).
+    tol : float, optional
+        Stop when ``||T V - V||_inf <= tol``; default ``1e-10 * max|R| / (1 - lambda)``.
+    max_iter : int
+        Limit on improvement steps.
+    eval_sweeps : int
+        Evaluation sweeps per improvement step of MPI.
+    extrapolate : bool
+        Use the Porteus/MacQueen constant shift (see the module docstring).
+    initial : array_like, optional
+        Starting vector (default 0).
+    evaluation : {"auto", "direct", "iterative"}
+        Policy iteration's evaluation: sparse LU, sweeps, or LU up to 200,000 states.
+    callback : callable(iteration, residual), optional
+        Called after each improvement step (progress bars).
+    raise_on_failure : bool
+        Raise :class:`~lpbounds.errors.ConvergenceError` at ``max_iter`` (default);
+        otherwise return with ``converged=False``.
+
+    Returns
+    -------
+    DPResult
+    """
+    t0 = time.perf_counter()
+    rows = exact_rows(model)
+    tol_ = _default_tol(rows, tol)
+    if method not in ("mpi", "vi", "pi"):
+        raise ValidationError(f"unknown method {method!r}; use 'mpi', 'vi' or 'pi'")
+    if max_iter < 1 or eval_sweeps < 0:
+        raise ValidationError("max_iter must be >= 1 and eval_sweeps >= 0")
+    v = np.zeros(rows.n_vars) if initial is None else rows._vec(initial).copy()
+    if method == "pi":
+        v, arg, res, its, sweeps, ok, hist = _policy_iteration(
+            model, rows, v, tol_, max_iter, evaluation, callback
+        )
+    else:
+        m = eval_sweeps if method == "mpi" else 0
+        v, arg, res, its, sweeps, ok, hist = _iterate(
+            rows, v, tol_, max_iter, m, extrapolate, callback
+        )
+    if not ok and raise_on_failure:
+        raise ConvergenceError(
+            f"{method} stopped after {its} iterations with residual {res:.3e} > tol {tol_:.3e}; "
+            "raise max_iter or tol"
+        )
+    return DPResult(
+        values=v,
+        policy=_policy_out(model, rows, arg),
+        policy_rows=arg,
+        residual=res,
+        error_bound=res / (1.0 - rows.discount),
+        tol=tol_,
+        iterations=its,
+        sweeps=sweeps,
+        seconds=time.perf_counter() - t0,
+        method=method,
+        converged=ok,
+        history=hist,
+    )
+
+
+def _shift(lam: float, d: np.ndarray) -> float:
+    return lam / (1.0 - lam) * 0.5 * (float(d.min()) + float(d.max()))
+
+
+def _iterate(
+    rows: BellmanRows,
+    v: np.ndarray,
+    tol: float,
+    max_iter: int,
+    eval_sweeps: int,
+    extrapolate: bool,
+    callback: Callback | None,
+) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
+    lam = rows.discount
+    sweeps = 0
+    hist: list[float] = []
+    res = np.inf
+    arg = np.zeros(rows.n_vars, dtype=np.int64)
+    for it in range(max_iter + 1):
+        tv, arg = rows.apply_max(v)
+        sweeps += 1
+        r = tv - v
+        lo, hi = float(r.min()), float(r.max())
+        res = max(-lo, hi)
+        hist.append(res)
+        if callback is not None:
+            callback(it, res)
+        if res <= tol:
+            return v, arg, res, it, sweeps, True, hist
+        if it == max_iter:
+            break
+        if extrapolate:
+            tv += lam / (1.0 - lam) * 0.5 * (lo + hi)
+        v = tv
+        for _ in range(eval_sweeps):
+            nv = rows.evaluate_rows(arg, v)
+            sweeps += 1
+            if extrapolate:
+                nv += _shift(lam, nv - v)
+            v = nv
+    return v, arg, res, max_iter, sweeps, False, hist
+
+
+def _greedy_rows(
+    rows: BellmanRows, v: np.ndarray, tie_rtol: float, prefer: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Greedy rows w.r.t. ``v`` (ties: ``prefer`` if tied, else the lowest action) and ``T v``."""
+    q = rows.q_values(v)
+    best = np.maximum.reduceat(q, rows.indptr[:-1])
+    thr = best - tie_rtol * np.maximum(1.0, np.abs(best))
+    cand = q >= thr[rows.owner]
+    idx = np.flatnonzero(cand)
+    _, first = np.unique(rows.owner[idx], return_index=True)
+    sel = idx[first]
+    if prefer is not None:
+        keep = cand[prefer]
+        sel = np.where(keep, prefer, sel)
+    return sel.astype(np.int64), best
+
+
+def _policy_iteration(
+    model: Model,
+    rows: BellmanRows,
+    v: np.ndarray,
+    tol: float,
+    max_iter: int,
+    evaluation: str,
+    callback: Callback | None,
+) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
+    pol, _ = _greedy_rows(rows, v, GREEDY_TIE_RTOL)
+    sweeps = 0
+    hist: list[float] = []
+    for it in range(1, max_iter + 1):
+        ev = _evaluate_rows(rows, pol, evaluation, tol * (1 - rows.discount) * 0.1)
+        v = ev.values
+        sweeps += ev.sweeps
+        new, tv = _greedy_rows(rows, v, GREEDY_TIE_RTOL, prefer=pol)
+        sweeps += 1
+        res = float(np.abs(tv - v).max())
+        hist.append(res)
+        if callback is not None:
+            callback(it, res)
+        if np.array_equal(new, pol):
+            tv, arg = rows.apply_max(v)
+            res = float(np.abs(tv - v).max())
+            return v, arg, res, it, sweeps, res <= tol, hist
+        pol = new
+    tv, arg = rows.apply_max(v)
+    return v, arg, float(np.abs(tv - v).max()), max_iter, sweeps, False, hist
+
+
+# ---------------------------------------------------------------------- evaluation
+def _evaluate_rows(
+    rows: BellmanRows, sel: np.ndarray, method: str, tol: float, max_sweeps: int = 1_000_000
+) -> PolicyEvaluation:
+    t0 = time.perf_counter()
+    lam = rows.discount
+    r_pi = rows.reward[sel]
+    if method == "auto":
+        method = "direct" if rows.n_vars <= 200_000 else "iterative"
+    if method == "direct":
+        p = rows.transition_matrix(sel)
+        a = sp.identity(rows.n_vars, format="csc") - lam * p.tocsc()
+        v = np.asarray(spla.spsolve(a, r_pi), dtype=np.float64)
+        sweeps = 0
+    elif method == "iterative":
+        v = np.zeros(rows.n_vars)
+        sweeps = 0
+        while True:
+            nv = rows.evaluate_rows(sel, v)
+            sweeps += 1
+            d = nv - v
+            lo, hi = float(d.min()), float(d.max())
+            if max(-lo, hi) <= tol or sweeps >= max_sweeps:
+                break
+            nv += lam / (1.0 - lam) * 0.5 * (lo + hi)
+            v = nv
+    else:
+        raise ValidationError(f"unknown evaluation {method!r}; use 'direct' or 'iterative'")
+    res = float(np.abs(rows.evaluate_rows(sel, v) - v).max())
+    if method == "iterative" and res > tol:
+        raise ConvergenceError(f"policy evaluation stopped with residual {res:.3e} > {tol:.3e}")
+    return PolicyEvaluation(
+        values=v,
+        residual=res,
+        error_bound=res / (1.0 - lam),
+        method=method,
+        sweeps=sweeps,
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def evaluate_policy(
+    model: Model,
+    policy: Any,
+    method: Literal["auto", "direct", "iterative"] = "auto",
+    tol: float | None = None,
+) -> PolicyEvaluation:
+    """``V_pi``, the solution of ``(I - lambda P_pi) V = R_pi`` (paper eq. 31).
+
+    Parameters
+    ----------
+    model : FiniteMDP or BellmanRows
+    policy : array_like of int
+        Actions per state (MDP) or rows per owner (row system).
+    method : {"auto", "direct", "iterative"}
+        Sparse LU (scipy's SuperLU), extrapolated sweeps to ``tol``, or LU up to
+        200,000 states and sweeps beyond.
+    tol : float, optional
+        Residual target of the iterative method (default as in :func:`solve_exact`).
+
+    Returns
+    -------
+    PolicyEvaluation
+        ``residual = ||R_pi + lambda P_pi V - V||_inf`` measured on the result.
+    """
+    rows = exact_rows(model)
+    sel = _policy_rows(model, rows, policy)
+    return _evaluate_rows(rows, sel, method, _default_tol(rows, tol))
+
+
+def greedy_policy(model: Model, values: Any, tie_rtol: float = GREEDY_TIE_RTOL) -> np.ndarray:
+    """A policy greedy w.r.t. ``values`` (paper Sec. 3.3 and eq. 30).
+
+    Tie rule: every action whose Q-value is within
+    ``tie_rtol * max(1, |max_u Q(x, u)|)`` of the maximum counts as tied, and the
+    lowest action index among them is chosen (for a row system: the first row).
+    """
+    rows = exact_rows(model)
+    sel, _ = _greedy_rows(rows, rows._vec(values), tie_rtol)
+    return _policy_out(model, rows, sel)
+
+
+def bellman_residual(model: Model, values: Any) -> float:
+    """``||T V - V||_inf``."""
+    rows = exact_rows(model)
+    v = rows._vec(values)
+    tv, _ = rows.apply_max(v)
+    return float(np.abs(tv - v).max())
+
+
+def porteus_bounds(model: Model, values: Any) -> PorteusBounds:
+    """The Porteus bounds of :class:`PorteusBounds` for a candidate ``V``."""
+    rows = exact_rows(model)
+    v = rows._vec(values)
+    lam = rows.discount
+    sel, tv = _greedy_rows(rows, v, GREEDY_TIE_RTOL)
+    # the lower bounds use the chosen policy's own Q-values, so a tie within
+    # GREEDY_TIE_RTOL cannot make them invalid
+    tpi = rows.evaluate_rows(sel, v)
+    alpha = tpi - v
+    a_lo = float(alpha.min())
+    a_hi = float((tv - v).max())
+    return PorteusBounds(
+        lower=tpi + lam / (1 - lam) * a_lo,
+        lower_paper=v + a_lo / (1 - lam),
+        upper=tv + lam / (1 - lam) * a_hi,
+        policy=_policy_out(model, rows, sel),
+        alpha_min=a_lo,
+        alpha_max=a_hi,
+    )

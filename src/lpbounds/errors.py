@@ -1,0 +1,29 @@
+"""Exceptions raised by lpbounds.
+
+Every error the package raises on purpose derives from :class:`LPBoundsError`, so a
+script can catch them all at once; each also derives from the built-in exception a
+Python user would expect (``ValueError`` for bad input, ``RuntimeError`` for a failed
+solve, ``ImportError`` for a missing solver).
+"""
+
+from __future__ import annotations
+
+
+class LPBoundsError(Exception):
+    """Base class of every error raised by lpbounds."""
+
+
+class ValidationError(LPBoundsError, ValueError):
+    """Input data that does not describe a valid model (names the offending entry)."""
+
+
+class SolverError(LPBoundsError, RuntimeError):
+    """A solve that did not return a trustworthy optimum (status, residual or dual check)."""
+
+
+class SolverNotInstalledError(LPBoundsError, ImportError):
+    """The requested solver is unknown to cvxpy or not installed on this machine."""
+
+
+class ConvergenceError(LPBoundsError, RuntimeError):
+    """An iterative method stopped at its iteration limit before reaching its tolerance."""

@@ -1,0 +1,45 @@
+r"""The exact LP (paper eq. 8).
+
+.. math:: ELP := \min c^T V \quad \text{s.t.} \quad V \ge R_u + \lambda P_u V \;\; \forall u.
+
+By Lemma 1 its optimum is ``V*`` for every cost ``c >= 0`` (unique for ``c > 0``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..dp import exact_rows
+from ..mdp import FiniteMDP
+from .rows_lp import RowsLP
+
+__all__ = ["ELP"]
+
+
+class ELP(RowsLP):
+    """The exact LP of ``mdp`` (eq. 8): one row per allowed (state, action).
+
+    Parameters
+    ----------
+    mdp : FiniteMDP
+    cost : array_like (n_states,), optional
+        ``c >= 0`` (default all ones).
+
+    Notes
+    -----
+    ``values`` and ``state_values`` of the result are ``V`` per state; ``mu`` holds the
+    duals per (state, action) (the discounted state-action frequencies when ``c`` is
+    an initial distribution).
+    """
+
+    name = "ELP"
+
+    def __init__(self, mdp: FiniteMDP, cost: Any = None) -> None:
+        self.mdp = mdp
+        super().__init__(exact_rows(mdp), cost)
+
+    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+        values, _, mu, extra = super()._interpret(x, y)
+        return values, values, mu, extra

@@ -1,0 +1,81 @@
+r"""The restricted LP under state aggregation (paper eq. 9, compact form eq. 10).
+
+.. math:: RLP := \min \sum_{i=1}^M \sum_{x \in S_i} c(x)\, v(i) \quad \text{s.t.}\quad
+          v(i) \ge R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))
+          \;\; \forall x \in S_i,\ i = 1..M,\ \forall u.
+
+``Phi v*`` is an upper bound on ``V*`` (Lemma 3 via Lemma 1), and by Theorem 1 the
+optimum ``v*`` is the same for every cost ``c >= 0``: it is the least feasible point,
+the fixed point of the max over the aggregated rows (Fact 1 in :mod:`lpbounds.rows`),
+and every feasible ``v`` dominates it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..errors import ValidationError
+from ..mdp import FiniteMDP
+from ..partition import Partition
+from ..rows import BellmanRows
+from .base import check_cost
+from .rows_lp import RowsLP
+
+__all__ = ["RLP"]
+
+
+class RLP(RowsLP):
+    """The restricted LP of ``mdp`` under ``partition`` (eq. 9).
+
+    Parameters
+    ----------
+    mdp : FiniteMDP
+    partition : Partition
+    cost : array_like (n_states,), optional
+        The paper's state weights ``c(x) >= 0`` (default all ones); the objective is
+        ``c-bar' v`` with ``c-bar(i) = sum_{x in S_i} c(x)``.
+    partition_cost : array_like (M,), optional
+        ``c-bar`` directly (instead of ``cost``).
+
+    Notes
+    -----
+    Identical aggregated rows are merged (and rows implied by a row with the same
+    successor distribution and a larger reward dropped): the LP has one row per
+    distinct (partition, action, successor distribution). The result's ``mu`` spreads
+    each row's dual equally over the (state, action) pairs it came from that attain its
+    reward: an optimal dual ``mu-bar`` of the unmerged RLP, as used by SLP (Lemma 2).
+    """
+
+    name = "RLP"
+
+    def __init__(
+        self,
+        mdp: FiniteMDP,
+        partition: Partition,
+        cost: Any = None,
+        *,
+        partition_cost: Any = None,
+        rows: BellmanRows | None = None,
+    ) -> None:
+        if partition.n_states != mdp.n_states:
+            raise ValidationError(
+                f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
+            )
+        if cost is not None and partition_cost is not None:
+            raise ValidationError("give cost (per state) or partition_cost (per partition), not both")
+        self.mdp = mdp
+        self.partition = partition
+        if partition_cost is not None:
+            cbar = check_cost(partition_cost, partition.n_partitions, "partition_cost")
+        else:
+            c = check_cost(cost, mdp.n_states)
+            cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
+        if rows is None:
+            rows = BellmanRows.aggregate(mdp, partition, reduce="max")
+        super().__init__(rows, cbar)
+
+    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+        values, _, mu, extra = super()._interpret(x, y)
+        return values, self.partition.lift(values), mu, extra

@@ -1,0 +1,197 @@
+"""Instance files (``models/*.toml``): named, reproducible models for the CLI and studies.
+
+A file has a ``[model]`` table whose ``kind`` picks a builder, and optionally a
+``[partition]`` table::
+
+    [model]
+    kind = "garnet"          # a seeded random MDP (lpbounds.generators.garnet)
+    n_states = 500
+    n_actions = 3
+    branching = 5
+    discount = 0.9
+    seed = 1
+
+    [partition]
+    kind = "random"          # lpbounds.generators.random_partition
+    n_partitions = 50
+    seed = 2
+
+Builders are registered in :data:`MODEL_KINDS` and :data:`PARTITION_KINDS` (kind ->
+``"module:function"``); unknown kinds and keys raise an error that names them. The MDP
+and the partition are built lazily, so an instance too large for exact DP can still be
+loaded for its partition-level bounds.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import ValidationError
+from .mdp import FiniteMDP
+from .partition import Partition
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["MODEL_KINDS", "PARTITION_KINDS", "Instance", "load_instance", "models_dir"]
+
+#: kind -> "module:function(config: dict) -> FiniteMDP"
+MODEL_KINDS: dict[str, str] = {
+    "garnet": "lpbounds.instances:_build_garnet",
+}
+#: kind -> "module:function(config: dict, instance: Instance) -> Partition"
+PARTITION_KINDS: dict[str, str] = {
+    "random": "lpbounds.instances:_build_random_partition",
+}
+
+
+def models_dir() -> Path:
+    """The ``models/`` folder: ``./models`` if it exists, else the repository's."""
+    here = Path.cwd() / "models"
+    if here.is_dir():
+        return here
+    return Path(__file__).resolve().parents[2] / "models"
+
+
+def _resolve(spec: str) -> Callable[..., Any]:
+    module, _, name = spec.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def check_keys(table: Mapping[str, Any], allowed: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """Merge ``table`` over the defaults ``allowed``; an unknown key raises ValidationError.
+
+    A default of ``...`` marks a required key.
+    """
+    unknown = sorted(set(table) - set(allowed) - {"kind"})
+    if unknown:
+        raise ValidationError(
+            f"unknown key(s) {unknown} in [{where}]; allowed: {sorted(allowed)}"
+        )
+    out = {k: table.get(k, v) for k, v in allowed.items()}
+    missing = [k for k, v in out.items() if v is ...]
+    if missing:
+        raise ValidationError(f"missing key(s) {missing} in [{where}]")
+    return out
+
+
+@dataclass
+class Instance:
+    """A loaded instance: its name, configuration and lazily built MDP and partition."""
+
+    name: str
+    config: dict[str, Any]
+    path: Path | None = None
+    _mdp: FiniteMDP | None = field(default=None, repr=False)
+    _partition: Partition | None = field(default=None, repr=False)
+
+    @property
+    def kind(self) -> str:
+        """The ``[model] kind``."""
+        return str(self.config["model"]["kind"])
+
+    @property
+    def has_partition(self) -> bool:
+        """True when the file has a ``[partition]`` table or the kind defines one."""
+        return "partition" in self.config
+
+    def mdp(self) -> FiniteMDP:
+        """The MDP (built on first use)."""
+        if self._mdp is None:
+            model = self.config["model"]
+            self._mdp = _resolve(MODEL_KINDS[self.kind])(model)
+        return self._mdp
+
+    def partition(self) -> Partition:
+        """The partition of the ``[partition]`` table (built on first use)."""
+        if self._partition is None:
+            table = self.config.get("partition")
+            if table is None:
+                raise ValidationError(f"instance {self.name!r} has no [partition] table")
+            kind = table.get("kind")
+            if kind not in PARTITION_KINDS:
+                raise ValidationError(
+                    f"unknown partition kind {kind!r}; known: {sorted(PARTITION_KINDS)}"
+                )
+            self._partition = _resolve(PARTITION_KINDS[kind])(table, self)
+        return self._partition
+
+
+def load_instance(source: str | Path | Mapping[str, Any], name: str | None = None) -> Instance:
+    """Load an instance from a TOML file, a name in ``models/``, or a dict.
+
+    Parameters
+    ----------
+    source : path, name or mapping
+        ``"models/garnet-small.toml"``, ``"garnet-small"`` (looked up in
+        :func:`models_dir`), or the parsed tables.
+    name : str, optional
+        Display name (default: the file's stem).
+    """
+    path: Path | None = None
+    if isinstance(source, Mapping):
+        config = dict(source)
+    else:
+        path = Path(source)
+        if not path.exists() and not path.suffix:
+            candidate = models_dir() / f"{path.name}.toml"
+            if candidate.exists():
+                path = candidate
+        if not path.exists():
+            raise ValidationError(f"no instance file {str(source)!r} (nor in {models_dir()})")
+        try:
+            with path.open("rb") as fh:
+                config = tomllib.load(fh)
+        except tomllib.TOMLDecodeError as exc:
+            raise ValidationError(f"{path}: not valid TOML: {exc}") from exc
+    model = config.get("model")
+    if not isinstance(model, Mapping) or "kind" not in model:
+        raise ValidationError("an instance needs a [model] table with a 'kind'")
+    if model["kind"] not in MODEL_KINDS:
+        raise ValidationError(f"unknown model kind {model['kind']!r}; known: {sorted(MODEL_KINDS)}")
+    display = name or (path.stem if path is not None else str(model["kind"]))
+    return Instance(name=display, config=config, path=path)
+
+
+# ---------------------------------------------------------------------- builders
+_GARNET_KEYS = {
+    "n_states": ...,
+    "n_actions": ...,
+    "branching": ...,
+    "discount": 0.9,
+    "seed": 0,
+    "shared_probabilities": False,
+    "reward_low": 0.0,
+    "reward_high": 1.0,
+    "allowed_fraction": 1.0,
+}
+
+
+def _build_garnet(table: Mapping[str, Any]) -> FiniteMDP:
+    from .generators import garnet
+
+    c = check_keys(table, _GARNET_KEYS, "model")
+    return garnet(
+        int(c["n_states"]),
+        int(c["n_actions"]),
+        int(c["branching"]),
+        float(c["discount"]),
+        int(c["seed"]),
+        shared_probabilities=bool(c["shared_probabilities"]),
+        reward_range=(float(c["reward_low"]), float(c["reward_high"])),
+        allowed_fraction=float(c["allowed_fraction"]),
+    )
+
+
+def _build_random_partition(table: Mapping[str, Any], instance: Instance) -> Partition:
+    from .generators import random_partition
+
+    c = check_keys(table, {"n_partitions": ..., "seed": 0}, "partition")
+    return random_partition(instance.mdp().n_states, int(c["n_partitions"]), int(c["seed"]))

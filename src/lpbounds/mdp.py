@@ -1,0 +1,394 @@
+"""Finite discounted MDPs in the paper's form ``x' = f(x, u, Y_l)`` (Section 2, eq. 1-2).
+
+A :class:`FiniteMDP` stores, for every state ``x`` and action ``u``, the ``L`` outcomes
+``f(x, u, Y_l)`` (``successors[x, u, l]``) with their probabilities ``p_l``
+(``probabilities[l]``, or ``probabilities[x, u, l]`` when they depend on the pair), the
+one-step reward ``R_u(x)`` (``rewards[x, u]``), the discount ``lambda`` and a mask of the
+allowed actions ``U_x`` (``allowed[x, u]``). Several outcomes may lead to the same state:
+the transition probability ``P_u(x, y)`` is the sum of the ``p_l`` with
+``f(x, u, Y_l) = y`` (eq. 2).
+
+All input is validated here, at the boundary, and a bad entry raises
+:class:`~lpbounds.errors.ValidationError` naming it. Arrays are stored read-only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import ValidationError
+from .tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
+
+__all__ = ["FiniteMDP", "index_dtype"]
+
+
+def index_dtype(n: int) -> type[np.signedinteger[Any]]:
+    """Smallest signed integer type that indexes ``n`` items (int32 or int64)."""
+    return np.int32 if n < 2**31 - 1 else np.int64
+
+
+def _first(mask: np.ndarray) -> tuple[int, ...]:
+    """Index of the first True entry of ``mask`` as a tuple of ints."""
+    return tuple(int(i) for i in np.argwhere(mask)[0])
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+class FiniteMDP:
+    r"""A finite discounted Markov decision process (maximisation of discounted reward).
+
+    Bellman's equation (paper eq. 3) reads
+
+    .. math:: V^*(x) = \max_{u \in U_x} \Big\{ R_u(x) + \lambda \sum_{l} p_l\,
+              V^*(f(x, u, Y_l)) \Big\}.
+
+    Parameters
+    ----------
+    successors : array_like of int, shape (n, A, L)
+        ``successors[x, u, l] = f(x, u, Y_l)``, a state index in ``0..n-1``.
+    probabilities : array_like of float, shape (L,) or (n, A, L)
+        ``p_l``, shared by every pair, or one distribution per (state, action).
+        Each allowed pair's probabilities must be non-negative and sum to one within
+        :data:`~lpbounds.tolerances.PROBABILITY_SUM_ATOL`.
+    rewards : array_like of float, shape (n, A)
+        ``R_u(x)``; must be finite on allowed pairs (other entries are ignored).
+    discount : float
+        ``lambda`` in ``[0, 1)``.
+    allowed : array_like of bool, shape (n, A), optional
+        ``allowed[x, u]`` is True when ``u`` is in ``U_x``; every state needs one.
+        Default: every action is allowed everywhere.
+    action_names : sequence of str, optional
+        Labels of the ``A`` actions, used in reports (default ``"0", "1", ...``).
+
+    Raises
+    ------
+    ValidationError
+        Naming the first offending entry (shape, index, probability, reward, discount).
+
+    Notes
+    -----
+    Successors of disallowed pairs are never read; they are replaced by the state
+    itself so that every stored index is in range.
+    """
+
+    def __init__(
+        self,
+        successors: Any,
+        probabilities: Any,
+        rewards: Any,
+        discount: float,
+        allowed: Any = None,
+        action_names: Sequence[str] | None = None,
+    ) -> None:
+        succ = np.asarray(successors)
+        if succ.ndim != 3:
+            raise ValidationError(
+                f"successors must have shape (n_states, n_actions, n_outcomes); got {succ.shape}"
+            )
+        n, n_actions, n_out = succ.shape
+        if n == 0 or n_actions == 0 or n_out == 0:
+            raise ValidationError(f"successors has an empty dimension: shape {succ.shape}")
+        if not np.issubdtype(succ.dtype, np.integer):
+            if not np.issubdtype(succ.dtype, np.floating) or not np.all(succ == np.round(succ)):
+                raise ValidationError(f"successors must be integers; got dtype {succ.dtype}")
+        self.discount = self._check_discount(discount)
+
+        allow = np.ones((n, n_actions), dtype=bool) if allowed is None else np.asarray(allowed)
+        if allow.shape != (n, n_actions):
+            raise ValidationError(
+                f"allowed must have shape {(n, n_actions)} (n_states, n_actions); got {allow.shape}"
+            )
+        if allow.dtype != bool:
+            if not np.all((allow == 0) | (allow == 1)):
+                raise ValidationError("allowed must be boolean (or 0/1)")
+            allow = allow.astype(bool)
+        no_action = ~allow.any(axis=1)
+        if no_action.any():
+            x = int(np.flatnonzero(no_action)[0])
+            raise ValidationError(
+                f"state {x} has no allowed action ({int(no_action.sum())} such states)"
+            )
+
+        idt = index_dtype(n)
+        succ = succ.astype(idt, copy=True)
+        bad = ((succ < 0) | (succ >= n)) & allow[:, :, None]
+        if bad.any():
+            x, u, ll = _first(bad)
+            raise ValidationError(
+                f"successors[{x}, {u}, {ll}] = {int(succ[x, u, ll])} is out of range "
+                f"[0, {n}) ({int(bad.sum())} such entries)"
+            )
+        if not allow.all():
+            rows, cols = np.nonzero(~allow)
+            succ[rows, cols, :] = rows[:, None].astype(idt)
+
+        rew = np.asarray(rewards, dtype=np.float64)
+        if rew.shape != (n, n_actions):
+            raise ValidationError(
+                f"rewards must have shape {(n, n_actions)} (n_states, n_actions); got {rew.shape}"
+            )
+        nonfinite = ~np.isfinite(rew) & allow
+        if nonfinite.any():
+            x, u = _first(nonfinite)
+            raise ValidationError(
+                f"rewards[{x}, {u}] = {rew[x, u]} is not finite on an allowed pair "
+                f"({int(nonfinite.sum())} such entries)"
+            )
+        rew = np.where(allow, rew, 0.0)
+
+        self.probabilities = _readonly(self._check_probabilities(probabilities, allow, succ.shape))
+        self.successors = _readonly(succ)
+        self.rewards = _readonly(rew)
+        self.allowed = _readonly(allow.copy())
+        if action_names is None:
+            action_names = [str(u) for u in range(n_actions)]
+        if len(action_names) != n_actions:
+            raise ValidationError(
+                f"action_names has {len(action_names)} names for {n_actions} actions"
+            )
+        self.action_names = tuple(str(a) for a in action_names)
+
+    # ------------------------------------------------------------------ validation
+    @staticmethod
+    def _check_discount(discount: float) -> float:
+        try:
+            lam = float(discount)
+        except (TypeError, ValueError) as exc:
+            raise ValidationError(f"discount must be a number in [0, 1); got {discount!r}") from exc
+        if not (0.0 <= lam < 1.0):
+            raise ValidationError(f"discount must lie in [0, 1); got {lam}")
+        return lam
+
+    @staticmethod
+    def _check_probabilities(
+        probabilities: Any, allow: np.ndarray, shape: tuple[int, int, int]
+    ) -> np.ndarray:
+        p = np.asarray(probabilities, dtype=np.float64)
+        n, n_actions, n_out = shape
+        if p.shape == (n_out,):
+            where = "probabilities"
+            if not np.all(np.isfinite(p)):
+                raise ValidationError(f"probabilities must be finite; got {p}")
+            if (p < -PROBABILITY_NEGATIVE_ATOL).any():
+                ll = int(np.flatnonzero(p < -PROBABILITY_NEGATIVE_ATOL)[0])
+                raise ValidationError(f"{where}[{ll}] = {p[ll]} is negative")
+            total = p.sum()
+            if abs(total - 1.0) > PROBABILITY_SUM_ATOL:
+                raise ValidationError(
+                    f"{where} sum to {total!r}, not 1 (tolerance {PROBABILITY_SUM_ATOL:g})"
+                )
+            return np.clip(p, 0.0, None)
+        if p.shape != shape:
+            raise ValidationError(
+                f"probabilities must have shape ({n_out},) or {shape}; got {p.shape}"
+            )
+        nonfinite = ~np.isfinite(p) & allow[:, :, None]
+        if nonfinite.any():
+            x, u, ll = _first(nonfinite)
+            raise ValidationError(f"probabilities[{x}, {u}, {ll}] = {p[x, u, ll]} is not finite")
+        neg = (p < -PROBABILITY_NEGATIVE_ATOL) & allow[:, :, None]
+        if neg.any():
+            x, u, ll = _first(neg)
+            raise ValidationError(
+                f"probabilities[{x}, {u}, {ll}] = {p[x, u, ll]} is negative "
+                f"({int(neg.sum())} such entries)"
+            )
+        sums = p.sum(axis=2)
+        off = (np.abs(sums - 1.0) > PROBABILITY_SUM_ATOL) & allow
+        if off.any():
+            x, u = _first(off)
+            raise ValidationError(
+                f"probabilities[{x}, {u}, :] sum to {sums[x, u]!r}, not 1 "
+                f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(off.sum())} such pairs)"
+            )
+        p = np.clip(p, 0.0, None)
+        p[~allow] = 0.0
+        p[~allow, 0] = 1.0
+        return p
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def n_states(self) -> int:
+        """Number of states ``|S|``."""
+        return int(self.successors.shape[0])
+
+    @property
+    def n_actions(self) -> int:
+        """Number of actions ``A`` (the union of every ``U_x``)."""
+        return int(self.successors.shape[1])
+
+    @property
+    def n_outcomes(self) -> int:
+        """Number of outcomes ``L`` (``m + 1`` in the paper) of each (state, action)."""
+        return int(self.successors.shape[2])
+
+    @property
+    def shared_probabilities(self) -> bool:
+        """True when one distribution ``p_l`` serves every (state, action)."""
+        return self.probabilities.ndim == 1
+
+    @property
+    def n_pairs(self) -> int:
+        """Number of allowed (state, action) pairs, i.e. of Bellman inequalities (eq. 5)."""
+        return int(self.allowed.sum())
+
+    @property
+    def reward_absmax(self) -> float:
+        """``max |R_u(x)|`` over the allowed pairs."""
+        return float(np.abs(self.rewards[self.allowed]).max())
+
+    def probabilities_full(self) -> np.ndarray:
+        """Probabilities as an (n, A, L) array (a read-only broadcast view when shared)."""
+        if self.shared_probabilities:
+            return np.broadcast_to(self.probabilities, self.successors.shape)
+        return self.probabilities
+
+    def __repr__(self) -> str:
+        return (
+            f"FiniteMDP(n_states={self.n_states}, n_actions={self.n_actions}, "
+            f"n_outcomes={self.n_outcomes}, discount={self.discount}, "
+            f"allowed_pairs={self.n_pairs})"
+        )
+
+    # ------------------------------------------------------------------ conversions
+    @classmethod
+    def from_matrices(cls, P: Any, R: Any, discount: float) -> FiniteMDP:
+        """Build an MDP from transition matrices in pymdptoolbox's convention.
+
+        Parameters
+        ----------
+        P : array (A, n, n) or sequence of A (n, n) matrices, dense or scipy.sparse
+            ``P[a][x, y]`` is the probability of moving from ``x`` to ``y`` under ``a``;
+            each row must sum to one.
+        R : array (n,), (n, A), or (A, n, n) / sequence of A (n, n) matrices
+            State rewards, expected rewards ``R[x, a]``, or transition rewards
+            ``R[a][x, y]`` (whose expectation ``sum_y P[a][x, y] R[a][x, y]`` is used).
+        discount : float
+            The discount in ``[0, 1)``.
+
+        Returns
+        -------
+        FiniteMDP
+            With ``L`` = the largest number of non-zeros in a row of ``P`` and the
+            outcomes of each pair listed in column order (padded with probability 0).
+        """
+        mats = cls._matrix_list(P, "P")
+        n_actions = len(mats)
+        n = mats[0].shape[0]
+        for a, m in enumerate(mats):
+            if m.shape != (n, n):
+                raise ValidationError(f"P[{a}] has shape {m.shape}; expected {(n, n)}")
+        nnz = np.stack([np.diff(m.indptr) for m in mats], axis=1)  # (n, A)
+        empty = nnz == 0
+        if empty.any():
+            x, a = _first(empty)
+            raise ValidationError(f"row {x} of P[{a}] is empty (sums to 0, not 1)")
+        n_out = int(nnz.max())
+        idt = index_dtype(n)
+        succ = np.repeat(np.arange(n, dtype=idt)[:, None, None], n_actions, axis=1)
+        succ = np.repeat(succ, n_out, axis=2)
+        prob = np.zeros((n, n_actions, n_out))
+        for a, m in enumerate(mats):
+            rows = np.repeat(np.arange(n), np.diff(m.indptr))
+            pos = np.arange(m.nnz) - m.indptr[rows]
+            succ[rows, a, pos] = m.indices
+            prob[rows, a, pos] = m.data
+        rew = cls._expected_rewards(R, mats, n, n_actions)
+        return cls(succ, prob, rew, discount)
+
+    @staticmethod
+    def _matrix_list(P: Any, name: str) -> list[sp.csr_matrix]:
+        if sp.issparse(P):
+            raise ValidationError(f"{name} must be A matrices (a list or an (A, n, n) array)")
+        if isinstance(P, np.ndarray):
+            if P.ndim != 3:
+                raise ValidationError(f"{name} must have shape (A, n, n); got {P.shape}")
+            items = list(P)
+        else:
+            try:
+                items = list(P)
+            except TypeError as exc:
+                raise ValidationError(f"{name} must be a sequence of A matrices") from exc
+        if not items:
+            raise ValidationError(f"{name} has no actions")
+        out = []
+        for a, m in enumerate(items):
+            mat = sp.csr_matrix(m, dtype=np.float64)
+            if mat.ndim != 2:
+                raise ValidationError(f"{name}[{a}] is not a matrix")
+            mat.sum_duplicates()
+            mat.eliminate_zeros()
+            mat.sort_indices()
+            out.append(mat)
+        return out
+
+    @classmethod
+    def _expected_rewards(
+        cls, R: Any, mats: list[sp.csr_matrix], n: int, n_actions: int
+    ) -> np.ndarray:
+        if not sp.issparse(R) and not isinstance(R, (list, tuple)):
+            arr = np.asarray(R, dtype=np.float64)
+            if arr.shape == (n,):
+                return np.repeat(arr[:, None], n_actions, axis=1)
+            if arr.shape == (n, n_actions):
+                return arr
+            if arr.shape != (n_actions, n, n):
+                raise ValidationError(
+                    f"R must have shape {(n,)}, {(n, n_actions)} or {(n_actions, n, n)}; "
+                    f"got {arr.shape}"
+                )
+        rmats = cls._matrix_list(R, "R")
+        if len(rmats) != n_actions:
+            raise ValidationError(f"R has {len(rmats)} matrices for {n_actions} actions")
+        cols = []
+        for a in range(n_actions):
+            if rmats[a].shape != (n, n):
+                raise ValidationError(f"R[{a}] has shape {rmats[a].shape}; expected {(n, n)}")
+            cols.append(np.asarray(mats[a].multiply(rmats[a]).sum(axis=1)).ravel())
+        return np.stack(cols, axis=1)
+
+    def to_matrices(
+        self, disallowed_reward: float | None = None
+    ) -> tuple[list[sp.csr_matrix], np.ndarray]:
+        """Transition matrices and expected rewards in pymdptoolbox's convention.
+
+        Parameters
+        ----------
+        disallowed_reward : float, optional
+            pymdptoolbox has no action masks. If some action is disallowed somewhere,
+            pass a (very negative) reward: disallowed pairs become self-loops with it.
+
+        Returns
+        -------
+        P : list of A scipy.sparse.csr_matrix, each (n, n)
+        R : ndarray (n, A)
+        """
+        n = self.n_states
+        if not self.allowed.all() and disallowed_reward is None:
+            x, u = _first(~self.allowed)
+            raise ValidationError(
+                f"action {u} is not allowed in state {x}; pymdptoolbox matrices cannot "
+                "express that: pass disallowed_reward= (a very negative number)"
+            )
+        probs = self.probabilities_full()
+        mats = []
+        for a in range(self.n_actions):
+            rows = np.repeat(np.arange(n), self.n_outcomes)
+            m = sp.csr_matrix(
+                (np.ascontiguousarray(probs[:, a, :]).ravel(), (rows, self.successors[:, a, :].ravel())),
+                shape=(n, n),
+            )
+            m.sum_duplicates()
+            m.eliminate_zeros()
+            mats.append(m)
+        rew = np.array(self.rewards, dtype=np.float64)
+        if disallowed_reward is not None:
+            rew[~self.allowed] = float(disallowed_reward)
+        return mats, rew

@@ -1,0 +1,142 @@
+"""Partitions of the state space into disjoint sets ``S_1..S_M`` (paper Section 3).
+
+A :class:`Partition` maps each state to its partition index (0-based here; the paper
+counts from 1). It provides the aggregation basis ``Phi`` of eq. (10),
+``Phi(x, i) = 1`` if ``x`` is in ``S_i`` and 0 otherwise, and the lift ``Phi v``.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import ValidationError
+from .mdp import index_dtype
+
+__all__ = ["Partition"]
+
+
+class Partition:
+    """A partition of ``n`` states into ``M`` non-empty sets.
+
+    Parameters
+    ----------
+    labels : array_like of int, shape (n,)
+        ``labels[x] = i`` when state ``x`` belongs to ``S_i``. The labels must use
+        every index ``0..M-1`` (no empty partition) and nothing else.
+    n_partitions : int, optional
+        ``M``; by default ``max(labels) + 1``. Given explicitly, it is checked.
+
+    Raises
+    ------
+    ValidationError
+        If a label is negative or not an integer, or an index in ``0..M-1`` is unused.
+    """
+
+    def __init__(self, labels: Any, n_partitions: int | None = None) -> None:
+        lab = np.asarray(labels)
+        if lab.ndim != 1 or lab.size == 0:
+            raise ValidationError(f"labels must be a non-empty 1-d array; got shape {lab.shape}")
+        if not np.issubdtype(lab.dtype, np.integer):
+            if not np.issubdtype(lab.dtype, np.floating) or not np.all(lab == np.round(lab)):
+                raise ValidationError(f"labels must be integers; got dtype {lab.dtype}")
+        if (lab < 0).any():
+            x = int(np.flatnonzero(lab < 0)[0])
+            raise ValidationError(f"labels[{x}] = {int(lab[x])} is negative")
+        m = int(lab.max()) + 1 if n_partitions is None else int(n_partitions)
+        if (lab >= m).any():
+            x = int(np.flatnonzero(lab >= m)[0])
+            raise ValidationError(f"labels[{x}] = {int(lab[x])} is not below n_partitions = {m}")
+        lab = lab.astype(index_dtype(max(m, lab.size)))
+        sizes = np.bincount(lab, minlength=m)
+        if (sizes == 0).any():
+            missing = np.flatnonzero(sizes == 0)
+            raise ValidationError(
+                f"partition index {int(missing[0])} has no state ({missing.size} of {m} indices "
+                "unused): labels must use every index 0..M-1"
+            )
+        lab.flags.writeable = False
+        sizes.flags.writeable = False
+        self.labels = lab
+        self.sizes = sizes
+
+    @classmethod
+    def from_keys(cls, keys: Any) -> Partition:
+        """Partition states by equal rows of ``keys`` (shape (n,) or (n, k)).
+
+        Partition indices follow the lexicographic order of the distinct keys.
+        """
+        k = np.asarray(keys)
+        if k.ndim == 1:
+            k = k[:, None]
+        _, inverse = np.unique(k, axis=0, return_inverse=True)
+        return cls(inverse.ravel())
+
+    @classmethod
+    def singletons(cls, n_states: int) -> Partition:
+        """The finest partition: every state alone (RLP becomes the exact LP)."""
+        return cls(np.arange(n_states))
+
+    @property
+    def n_states(self) -> int:
+        """Number of states ``n``."""
+        return int(self.labels.size)
+
+    @property
+    def n_partitions(self) -> int:
+        """Number of partitions ``M``."""
+        return int(self.sizes.size)
+
+    @cached_property
+    def _order(self) -> tuple[np.ndarray, np.ndarray]:
+        order = np.argsort(self.labels, kind="stable")
+        indptr = np.zeros(self.n_partitions + 1, dtype=np.int64)
+        np.cumsum(self.sizes, out=indptr[1:])
+        return order, indptr
+
+    def members(self, i: int) -> np.ndarray:
+        """The states of ``S_i``, in increasing order."""
+        if not 0 <= i < self.n_partitions:
+            raise ValidationError(f"partition index {i} is out of range [0, {self.n_partitions})")
+        order, indptr = self._order
+        return order[indptr[i] : indptr[i + 1]]
+
+    @cached_property
+    def basis(self) -> sp.csr_matrix:
+        """The basis ``Phi`` of eq. (10), a sparse (n, M) 0/1 matrix."""
+        n = self.n_states
+        return sp.csr_matrix(
+            (np.ones(n), self.labels, np.arange(n + 1)), shape=(n, self.n_partitions)
+        )
+
+    def lift(self, v: Any) -> np.ndarray:
+        """``Phi v``: the value of each state's partition, shape (n,) (or (n, k))."""
+        arr = np.asarray(v)
+        if arr.shape[0] != self.n_partitions:
+            raise ValidationError(
+                f"a vector over partitions must have length {self.n_partitions}; got {arr.shape}"
+            )
+        return arr[self.labels]
+
+    def aggregate(self, x: Any, how: str = "sum") -> np.ndarray:
+        """Per-partition ``sum``, ``min``, ``max`` or ``mean`` of a per-state vector."""
+        arr = np.asarray(x, dtype=np.float64)
+        if arr.shape != (self.n_states,):
+            raise ValidationError(
+                f"a vector over states must have length {self.n_states}; got {arr.shape}"
+            )
+        if how in ("sum", "mean"):
+            s = np.bincount(self.labels, weights=arr, minlength=self.n_partitions)
+            return s / self.sizes if how == "mean" else s
+        order, indptr = self._order
+        if how == "min":
+            return np.minimum.reduceat(arr[order], indptr[:-1])
+        if how == "max":
+            return np.maximum.reduceat(arr[order], indptr[:-1])
+        raise ValidationError(f"unknown aggregation {how!r}; use sum, mean, min or max")
+
+    def __repr__(self) -> str:
+        return f"Partition(n_states={self.n_states}, n_partitions={self.n_partitions})"

@@ -1,0 +1,455 @@
+r"""Systems of Bellman rows: the one structure every formulation in lpbounds is made of.
+
+A *Bellman row* ``r`` constrains one variable, its *owner* ``i``:
+
+.. math:: v(i) \;\ge\; \rho_r + \lambda \sum_{l} p_{r,l}\, v(k_{r,l}).
+
+* The exact LP (eq. 8) has one row per allowed (state, action): owner ``x``,
+  reward ``R_u(x)``, targets ``f(x, u, Y_l)``.
+* The restricted LP (eq. 9) has the same rows with every state replaced by its
+  partition: owner ``i`` with ``x`` in ``S_i``, targets ``f-bar(x, u, Y_l)``. Rows that
+  become identical are merged (:meth:`BellmanRows.aggregate`).
+* UBLP/LBLP (eq. 26, 29) are row systems on the partitions; the disjunctive NLP (eq. 25)
+  groups the rows of each (partition, action) into one disjunction.
+
+**Fact 1 (least feasible point).** For any row system in which every owner has at
+least one row, the set ``F = {v : v(i) >= q_r(v) for every row r of i}`` has a least
+element, the unique fixed point ``v*`` of ``(Tv)(i) = max_{r of i} q_r(v)``, and
+``v* = argmin c'v`` over ``F`` for *every* ``c >= 0`` (``c > 0`` makes it the unique
+minimiser).
+
+*Proof.* The rows are the Bellman inequalities of an MDP whose states are the owners
+and whose actions at ``i`` are the rows of ``i`` (each row's outcome probabilities are
+non-negative and sum to 1). ``T`` is that MDP's Bellman operator: monotone and a
+``lambda``-contraction in the max norm, so it has one fixed point ``v*``. If ``v`` is in
+``F`` then ``v >= Tv``, hence ``v >= T^k v -> v*`` by monotonicity; ``v*`` itself is in
+``F``. So ``v*`` is the least element, and ``c'v >= c'v*`` for ``c >= 0``. This is
+Lemma 1 and Remark 3 of the paper, and, with the RLP's rows, Theorem 1: RLP's optimum
+does not depend on the cost. []
+
+**Fact 2 (disjunctive rows).** Group the rows of owner ``i`` by action ``u``. The set
+``G = {w : w(i) >= min_{r in (i, u)} q_r(w) for every (i, u)}`` has the least element
+``w*``, the fixed point of ``(Gw)(i) = max_u min_{r in (i,u)} q_r(w)``: the value of a
+zero-sum stochastic game (the controller picks ``u``, an adversary the row).
+
+*Proof.* ``G`` is monotone (max and min of monotone maps) and a ``lambda``-contraction
+(max and min are 1-Lipschitz in the max norm), so it has one fixed point ``w*``, in
+``G``. If ``w`` is in ``G`` then ``w >= Gw >= ... -> w*``. []
+
+So the NLP (eq. 24-25) has the same optimum for every cost ``c >= 0`` and one solve
+gives the bound for every partition; the paper's one-LP-per-partition is not needed.
+The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import _kernels
+from .errors import ValidationError
+from .mdp import FiniteMDP, index_dtype
+from .partition import Partition
+
+__all__ = ["BellmanRows"]
+
+Reduce = Literal["max", "min"]
+
+
+@dataclass(frozen=True, eq=False)
+class BellmanRows:
+    r"""A system of Bellman rows ``v(owner_r) >= reward_r + discount * sum_l probs_{r,l} v(targets_{r,l})``.
+
+    Rows are sorted by (owner, action); ``indptr`` gives each owner's slice, so every
+    owner ``i`` has rows ``indptr[i]:indptr[i+1]`` (at least one).
+
+    Attributes
+    ----------
+    n_vars : int
+        Number of variables (states for exact rows, partitions for aggregated ones).
+    indptr : ndarray (n_vars + 1,)
+    owner, action : ndarray (R,)
+    reward : ndarray (R,)
+    targets : ndarray (R, L)
+    probs : ndarray (R, L)
+        Possibly a read-only broadcast view when every row shares one distribution.
+    discount : float
+    pair_row : ndarray (n_states, A) or None
+        For rows built from an MDP, the row each allowed (state, action) pair became
+        (-1 for disallowed pairs): the map used to report duals as the paper's ``mu``.
+    pair_tight : ndarray (n_states, A) or None
+        False for a pair whose row was merged into one with a strictly larger
+        reward (``reduce="max"``) or smaller reward (``reduce="min"``), i.e. a pair whose
+        own inequality is implied by (or, for ``min``, implies) the kept row.
+    """
+
+    n_vars: int
+    indptr: np.ndarray
+    owner: np.ndarray
+    action: np.ndarray
+    reward: np.ndarray
+    targets: np.ndarray
+    probs: np.ndarray
+    discount: float
+    pair_row: np.ndarray | None = None
+    pair_tight: np.ndarray | None = None
+
+    # ------------------------------------------------------------------ builders
+    @classmethod
+    def from_arrays(
+        cls,
+        owner: Any,
+        action: Any,
+        reward: Any,
+        targets: Any,
+        probs: Any,
+        discount: float,
+        n_vars: int,
+    ) -> BellmanRows:
+        """Build a row system from arrays (sorted here by owner, then action).
+
+        Raises
+        ------
+        ValidationError
+            If shapes disagree, an index is out of range, a row's probabilities are
+            negative or do not sum to one, or some owner has no row.
+        """
+        owner = np.asarray(owner)
+        n_rows = owner.shape[0]
+        targets = np.asarray(targets)
+        if targets.ndim != 2 or targets.shape[0] != n_rows:
+            raise ValidationError(f"targets must have shape ({n_rows}, L); got {targets.shape}")
+        probs = np.asarray(probs, dtype=np.float64)
+        if probs.ndim == 1:
+            probs = np.broadcast_to(probs, targets.shape)
+        if probs.shape != targets.shape:
+            raise ValidationError(f"probs must have shape {targets.shape}; got {probs.shape}")
+        reward = np.asarray(reward, dtype=np.float64)
+        action = np.asarray(action)
+        if reward.shape != (n_rows,) or action.shape != (n_rows,):
+            raise ValidationError("owner, action and reward must have the same length")
+        lam = FiniteMDP._check_discount(discount)
+        for name, arr in (("owner", owner), ("targets", targets)):
+            if arr.size and (arr.min() < 0 or arr.max() >= n_vars):
+                raise ValidationError(f"{name} has an index outside [0, {n_vars})")
+        if not np.all(np.isfinite(reward)):
+            raise ValidationError("row rewards must be finite")
+        if (probs < 0).any() or np.abs(probs.sum(axis=1) - 1).max(initial=0) > 1e-9:
+            raise ValidationError("each row's probabilities must be >= 0 and sum to 1")
+        order = np.lexsort((action, owner))
+        idt = index_dtype(n_vars)
+        return cls._finish(
+            n_vars,
+            owner[order].astype(idt),
+            action[order].astype(np.int32),
+            reward[order],
+            targets[order].astype(idt),
+            probs if probs.strides[0] == 0 else probs[order],
+            lam,
+        )
+
+    @classmethod
+    def _finish(
+        cls,
+        n_vars: int,
+        owner: np.ndarray,
+        action: np.ndarray,
+        reward: np.ndarray,
+        targets: np.ndarray,
+        probs: np.ndarray,
+        discount: float,
+        pair_row: np.ndarray | None = None,
+        pair_tight: np.ndarray | None = None,
+    ) -> BellmanRows:
+        counts = np.bincount(owner, minlength=n_vars)
+        if (counts == 0).any():
+            i = int(np.flatnonzero(counts == 0)[0])
+            raise ValidationError(
+                f"variable {i} owns no Bellman row ({int((counts == 0).sum())} such): "
+                "it would be unbounded below"
+            )
+        indptr = np.zeros(n_vars + 1, dtype=np.int64)
+        np.cumsum(counts, out=indptr[1:])
+        return cls(
+            n_vars=int(n_vars),
+            indptr=indptr,
+            owner=owner,
+            action=action,
+            reward=reward,
+            targets=targets,
+            probs=probs,
+            discount=float(discount),
+            pair_row=pair_row,
+            pair_tight=pair_tight,
+        )
+
+    @classmethod
+    def from_mdp(cls, mdp: FiniteMDP) -> BellmanRows:
+        """The exact rows (eq. 5): one per allowed (state, action), owner = the state.
+
+        When every action is allowed everywhere the arrays are views of the MDP's.
+        """
+        n, n_actions, n_out = mdp.successors.shape
+        probs_full = mdp.probabilities_full()
+        pair_row = np.full((n, n_actions), -1, dtype=np.int64)
+        if mdp.allowed.all():
+            owner = np.repeat(np.arange(n, dtype=index_dtype(n)), n_actions)
+            action = np.tile(np.arange(n_actions, dtype=np.int32), n)
+            reward = mdp.rewards.reshape(-1)
+            targets = mdp.successors.reshape(-1, n_out)
+            if mdp.shared_probabilities:
+                probs = np.broadcast_to(mdp.probabilities, (n * n_actions, n_out))
+            else:
+                probs = probs_full.reshape(-1, n_out)
+            pair_row[:] = np.arange(n * n_actions).reshape(n, n_actions)
+        else:
+            xs, us = np.nonzero(mdp.allowed)
+            owner = xs.astype(index_dtype(n))
+            action = us.astype(np.int32)
+            reward = mdp.rewards[xs, us]
+            targets = mdp.successors[xs, us]
+            if mdp.shared_probabilities:
+                probs = np.broadcast_to(mdp.probabilities, (xs.size, n_out))
+            else:
+                probs = probs_full[xs, us]
+            pair_row[xs, us] = np.arange(xs.size)
+        tight = mdp.allowed.copy()
+        return cls._finish(n, owner, action, reward, targets, probs, mdp.discount, pair_row, tight)
+
+    @classmethod
+    def aggregate(
+        cls, mdp: FiniteMDP, partition: Partition, reduce: Reduce = "max"
+    ) -> BellmanRows:
+        """The aggregated rows of the restricted LP (eq. 9): ``f-bar`` in place of ``f``.
+
+        Row of pair ``(x, u)``: owner ``i`` (the partition of ``x``), reward ``R_u(x)``,
+        targets ``f-bar(x, u, Y_l)``. Each row's outcomes are merged by target and
+        sorted; rows of the same owner and action with the same successor
+        distribution are merged into one, keeping the largest reward
+        (``reduce="max"``: the other rows are implied, as in RLP) or the smallest
+        (``reduce="min"``: the disjunctive NLP's terms, eq. 25).
+
+        Parameters
+        ----------
+        mdp : FiniteMDP
+        partition : Partition
+            Must have ``mdp.n_states`` states.
+        reduce : {"max", "min"}
+
+        Returns
+        -------
+        BellmanRows
+            With ``pair_row``/``pair_tight`` mapping every pair to its merged row.
+        """
+        if partition.n_states != mdp.n_states:
+            raise ValidationError(
+                f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
+            )
+        if reduce not in ("max", "min"):
+            raise ValidationError(f"reduce must be 'max' or 'min'; got {reduce!r}")
+        exact = cls.from_mdp(mdp)
+        labels = partition.labels
+        m = partition.n_partitions
+        idt = index_dtype(m)
+        owner = labels[exact.owner].astype(idt)
+        raw_t = labels[exact.targets].astype(idt)
+        targets = np.empty_like(raw_t)
+        probs = np.empty(raw_t.shape, dtype=np.float64)
+        _kernels.canonicalize(raw_t, exact.probs, targets, probs)
+        del raw_t
+        group, n_groups = _group_rows(owner, exact.action, targets, probs)
+        # reduce rewards within groups; keep the first row of each group as representative
+        order = np.argsort(group, kind="stable")
+        starts = np.flatnonzero(np.r_[True, np.diff(group[order]) != 0])
+        ufunc = np.maximum if reduce == "max" else np.minimum
+        red = ufunc.reduceat(exact.reward[order], starts)
+        rep = order[starts]
+        # sort the merged rows by (owner, action)
+        final = np.lexsort((exact.action[rep], owner[rep]))
+        rank = np.empty(n_groups, dtype=np.int64)
+        rank[final] = np.arange(n_groups)
+        rep = rep[final]
+        pair_row = np.full(exact.pair_row.shape, -1, dtype=np.int64)
+        allowed = exact.pair_row >= 0
+        row_of_exact = rank[group]
+        pair_row[allowed] = row_of_exact[exact.pair_row[allowed]]
+        reward_merged = red[final]
+        tight = np.zeros(pair_row.shape, dtype=bool)
+        tight[allowed] = exact.reward[exact.pair_row[allowed]] == reward_merged[pair_row[allowed]]
+        return cls._finish(
+            m,
+            owner[rep],
+            exact.action[rep].astype(np.int32),
+            reward_merged,
+            targets[rep],
+            probs[rep],
+            mdp.discount,
+            pair_row,
+            tight,
+        )
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def n_rows(self) -> int:
+        """Number of rows ``R``."""
+        return int(self.owner.shape[0])
+
+    @property
+    def n_outcomes(self) -> int:
+        """Outcomes per row ``L`` (padded with probability 0)."""
+        return int(self.targets.shape[1])
+
+    def __repr__(self) -> str:
+        return (
+            f"BellmanRows(n_vars={self.n_vars}, n_rows={self.n_rows}, "
+            f"n_outcomes={self.n_outcomes}, discount={self.discount})"
+        )
+
+    # ------------------------------------------------------------------ operators
+    def _vec(self, v: Any) -> np.ndarray:
+        arr = np.ascontiguousarray(v, dtype=np.float64)
+        if arr.shape != (self.n_vars,):
+            raise ValidationError(f"expected a vector of length {self.n_vars}; got {arr.shape}")
+        return arr
+
+    def q_values(self, v: Any) -> np.ndarray:
+        """``q_r(v) = reward_r + discount * sum_l probs_{r,l} v(targets_{r,l})`` per row."""
+        out = np.empty(self.n_rows)
+        _kernels.q_values(self.reward, self.targets, self.probs, self.discount, self._vec(v), out)
+        return out
+
+    def apply_max(self, v: Any) -> tuple[np.ndarray, np.ndarray]:
+        """``(Tv)(i) = max_{r of i} q_r(v)`` and the first maximising row of each owner."""
+        out = np.empty(self.n_vars)
+        arg = np.empty(self.n_vars, dtype=np.int64)
+        _kernels.bellman_max(
+            self.indptr, self.reward, self.targets, self.probs, self.discount, self._vec(v), out, arg
+        )
+        return out, arg
+
+    def apply_maxmin(self, v: Any) -> tuple[np.ndarray, np.ndarray]:
+        """``(Gv)(i) = max_u min_{r in (i, u)} q_r(v)`` and the minimising row of the best ``u``."""
+        out = np.empty(self.n_vars)
+        arg = np.empty(self.n_vars, dtype=np.int64)
+        _kernels.bellman_maxmin(
+            self.indptr,
+            self.action,
+            self.reward,
+            self.targets,
+            self.probs,
+            self.discount,
+            self._vec(v),
+            out,
+            arg,
+        )
+        return out, arg
+
+    def evaluate_rows(self, rows: np.ndarray, v: Any) -> np.ndarray:
+        """One policy-evaluation sweep: ``out[i] = q_{rows[i]}(v)``."""
+        out = np.empty(self.n_vars)
+        _kernels.policy_sweep(
+            np.ascontiguousarray(rows, dtype=np.int64),
+            self.reward,
+            self.targets,
+            self.probs,
+            self.discount,
+            self._vec(v),
+            out,
+        )
+        return out
+
+    def violation(self, v: Any) -> float:
+        """``max_r (q_r(v) - v(owner_r))_+``: how far ``v`` is from satisfying every row."""
+        vv = self._vec(v)
+        return float(max(0.0, (self.q_values(vv) - vv[self.owner]).max()))
+
+    # ------------------------------------------------------------------ LP data
+    def constraint_matrix(self) -> tuple[sp.csr_matrix, np.ndarray]:
+        """``(A, b)`` with the rows as ``A v >= b``: ``A = E - discount * P``, ``b = reward``.
+
+        ``E[r, owner_r] = 1`` and ``P[r, k] = sum of probs_{r,l}`` with ``targets_{r,l} = k``;
+        zero-probability padding is dropped.
+        """
+        n_rows, n_out = self.targets.shape
+        probs = np.asarray(self.probs)
+        keep = probs != 0.0
+        rows = np.concatenate(
+            [np.arange(n_rows), np.broadcast_to(np.arange(n_rows)[:, None], (n_rows, n_out))[keep]]
+        )
+        cols = np.concatenate([self.owner, self.targets[keep]])
+        data = np.concatenate([np.ones(n_rows), -self.discount * probs[keep]])
+        a = sp.csr_matrix((data, (rows, cols)), shape=(n_rows, self.n_vars))
+        a.sum_duplicates()
+        return a, np.array(self.reward)
+
+    def transition_matrix(self, rows: np.ndarray) -> sp.csr_matrix:
+        """The (n_vars, n_vars) transition matrix of the policy choosing ``rows[i]`` at ``i``."""
+        rows = np.asarray(rows, dtype=np.int64)
+        probs = np.asarray(self.probs)[rows]
+        cols = self.targets[rows]
+        r_idx = np.broadcast_to(np.arange(self.n_vars)[:, None], cols.shape)
+        keep = probs != 0.0
+        m = sp.csr_matrix(
+            (probs[keep], (r_idx[keep], cols[keep])), shape=(self.n_vars, self.n_vars)
+        )
+        m.sum_duplicates()
+        return m
+
+    def pair_values(self, row_values: Any) -> np.ndarray:
+        """Spread per-row numbers (e.g. LP duals) over the (state, action) pairs.
+
+        A merged row's value is split equally among its tight pairs; non-tight and
+        disallowed pairs get 0. For LP duals this gives the paper's ``mu_u^i(x)``: an
+        optimal dual of the unmerged LP (any split of a merged row's dual among
+        identical rows is optimal, and dominated rows have zero dual).
+        """
+        if self.pair_row is None or self.pair_tight is None:
+            raise ValidationError("these rows were not built from an MDP: no pair map")
+        vals = np.asarray(row_values, dtype=np.float64)
+        if vals.shape != (self.n_rows,):
+            raise ValidationError(f"expected {self.n_rows} row values; got {vals.shape}")
+        tight_rows = self.pair_row[self.pair_tight]
+        counts = np.bincount(tight_rows, minlength=self.n_rows)
+        out = np.zeros(self.pair_row.shape)
+        share = np.divide(vals, counts, out=np.zeros_like(vals), where=counts > 0)
+        out[self.pair_tight] = share[tight_rows]
+        return out
+
+
+def _group_rows(
+    owner: np.ndarray, action: np.ndarray, targets: np.ndarray, probs: np.ndarray
+) -> tuple[np.ndarray, int]:
+    """Group id of each row by equal (owner, action, targets, probs), exactly.
+
+    A 64-bit hash sorts the rows; equal hashes are then checked entry by entry and, in
+    the (astronomically rare) event of a collision, ``np.unique`` decides instead.
+    """
+    n_rows = owner.shape[0]
+    if n_rows == 0:
+        return np.zeros(0, dtype=np.int64), 0
+    pbits = np.ascontiguousarray(probs).view(np.int64)
+    h = np.empty(n_rows, dtype=np.uint64)
+    _kernels.hash_rows(owner, action, targets, pbits, h)
+    order = np.argsort(h, kind="stable")
+    hs = h[order]
+    same = hs[1:] == hs[:-1]
+    a, b = order[1:][same], order[:-1][same]
+    exact = (
+        np.array_equal(owner[a], owner[b])
+        and np.array_equal(action[a], action[b])
+        and np.array_equal(targets[a], targets[b])
+        and np.array_equal(pbits[a], pbits[b])
+    )
+    if not exact:  # hash collision: fall back to an exact sort of the keys
+        keys = np.column_stack([owner, action, targets, pbits]).astype(np.int64)
+        _, inv = np.unique(keys, axis=0, return_inverse=True)
+        inv = inv.ravel()
+        return inv.astype(np.int64), int(inv.max()) + 1
+    new = np.r_[True, ~same]
+    gid_sorted = np.cumsum(new) - 1
+    group = np.empty(n_rows, dtype=np.int64)
+    group[order] = gid_sorted
+    return group, int(gid_sorted[-1]) + 1
