@@ -48,7 +48,9 @@ def bellman_max(indptr, reward, targets, probs, discount, v, out, arg):  # pragm
 
 
 @njit(parallel=True, **_OPTS)
-def bellman_maxmin(indptr, action, reward, targets, probs, discount, v, out, arg):  # pragma: no cover
+def bellman_maxmin(
+    indptr, action, reward, targets, probs, discount, v, out, arg
+):  # pragma: no cover
     """Stochastic-game operator: max over actions of min over the rows of each action.
 
     Rows of one owner must be sorted by action; ``arg[i]`` is the minimising row of the

@@ -87,7 +87,9 @@ def _policy_out(model: Model, rows: BellmanRows, policy_rows: np.ndarray) -> np.
 def _policy_rows(model: Model, rows: BellmanRows, policy: Any) -> np.ndarray:
     pol = np.asarray(policy)
     if pol.shape != (rows.n_vars,) or not np.issubdtype(pol.dtype, np.integer):
-        raise ValidationError(f"a policy must be {rows.n_vars} integers; got {pol.shape} {pol.dtype}")
+        raise ValidationError(
+            f"a policy must be {rows.n_vars} integers; got {pol.shape} {pol.dtype}"
+        )
     if isinstance(model, FiniteMDP):
         if (pol < 0).any() or (pol >= model.n_actions).any():
             x = int(np.flatnonzero((pol < 0) | (pol >= model.n_actions))[0])

@@ -54,9 +54,9 @@ def garnet(
         index_dtype(n_states)
     )
     shape = (branching,) if shared_probabilities else (n_states, n_actions, branching)
-    cuts = np.sort(rng.random(shape[:-1] + (branching - 1,)), axis=-1)
-    zeros = np.zeros(shape[:-1] + (1,))
-    ones = np.ones(shape[:-1] + (1,))
+    cuts = np.sort(rng.random((*shape[:-1], branching - 1)), axis=-1)
+    zeros = np.zeros((*shape[:-1], 1))
+    ones = np.ones((*shape[:-1], 1))
     probs = np.diff(np.concatenate([zeros, cuts, ones], axis=-1), axis=-1)
     lo, hi = reward_range
     rewards = rng.uniform(lo, hi, size=(n_states, n_actions))

@@ -72,9 +72,7 @@ def check_keys(table: Mapping[str, Any], allowed: Mapping[str, Any], where: str)
     """
     unknown = sorted(set(table) - set(allowed) - {"kind"})
     if unknown:
-        raise ValidationError(
-            f"unknown key(s) {unknown} in [{where}]; allowed: {sorted(allowed)}"
-        )
+        raise ValidationError(f"unknown key(s) {unknown} in [{where}]; allowed: {sorted(allowed)}")
     out = {k: table.get(k, v) for k, v in allowed.items()}
     missing = [k for k, v in out.items() if v is ...]
     if missing:

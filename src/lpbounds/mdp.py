@@ -171,7 +171,7 @@ class FiniteMDP:
         probabilities: Any, allow: np.ndarray, shape: tuple[int, int, int]
     ) -> np.ndarray:
         p = np.asarray(probabilities, dtype=np.float64)
-        n, n_actions, n_out = shape
+        _n, _n_actions, n_out = shape
         if p.shape == (n_out,):
             where = "probabilities"
             if not np.all(np.isfinite(p)):
@@ -382,7 +382,10 @@ class FiniteMDP:
         for a in range(self.n_actions):
             rows = np.repeat(np.arange(n), self.n_outcomes)
             m = sp.csr_matrix(
-                (np.ascontiguousarray(probs[:, a, :]).ravel(), (rows, self.successors[:, a, :].ravel())),
+                (
+                    np.ascontiguousarray(probs[:, a, :]).ravel(),
+                    (rows, self.successors[:, a, :].ravel()),
+                ),
                 shape=(n, n),
             )
             m.sum_duplicates()

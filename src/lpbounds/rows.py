@@ -61,7 +61,7 @@ Reduce = Literal["max", "min"]
 
 @dataclass(frozen=True, eq=False)
 class BellmanRows:
-    r"""A system of Bellman rows ``v(owner_r) >= reward_r + discount * sum_l probs_{r,l} v(targets_{r,l})``.
+    r"""A system of Bellman rows ``v(owner_r) >= reward_r + discount * sum_l p_{r,l} v(k_{r,l})``.
 
     Rows are sorted by (owner, action); ``indptr`` gives each owner's slice, so every
     owner ``i`` has rows ``indptr[i]:indptr[i+1]`` (at least one).
@@ -220,9 +220,7 @@ class BellmanRows:
         return cls._finish(n, owner, action, reward, targets, probs, mdp.discount, pair_row, tight)
 
     @classmethod
-    def aggregate(
-        cls, mdp: FiniteMDP, partition: Partition, reduce: Reduce = "max"
-    ) -> BellmanRows:
+    def aggregate(cls, mdp: FiniteMDP, partition: Partition, reduce: Reduce = "max") -> BellmanRows:
         """The aggregated rows of the restricted LP (eq. 9): ``f-bar`` in place of ``f``.
 
         Row of pair ``(x, u)``: owner ``i`` (the partition of ``x``), reward ``R_u(x)``,
@@ -326,7 +324,14 @@ class BellmanRows:
         out = np.empty(self.n_vars)
         arg = np.empty(self.n_vars, dtype=np.int64)
         _kernels.bellman_max(
-            self.indptr, self.reward, self.targets, self.probs, self.discount, self._vec(v), out, arg
+            self.indptr,
+            self.reward,
+            self.targets,
+            self.probs,
+            self.discount,
+            self._vec(v),
+            out,
+            arg,
         )
         return out, arg
 

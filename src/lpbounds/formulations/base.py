@@ -293,16 +293,18 @@ class Formulation:
         try:
             self.problem.solve(solver=name, verbose=verbose, **solver_options)
         except cp.SolverError as exc:
-            return self._failed(name, solver_options, Status.SOLVER_ERROR, str(exc), t0,
-                                raise_on_failure)
+            return self._failed(
+                name, solver_options, Status.SOLVER_ERROR, str(exc), t0, raise_on_failure
+            )
         except (ValueError, TypeError) as exc:
             raise SolverError(f"{self.name} with {name}: bad solver option: {exc}") from exc
         status = _STATUS.get(self.problem.status, Status.SOLVER_ERROR)
         x = self.variable.value
         y = self.constraint.dual_value
         if x is None or status in (Status.INFEASIBLE, Status.UNBOUNDED, Status.SOLVER_ERROR):
-            return self._failed(name, solver_options, status, str(self.problem.status), t0,
-                                raise_on_failure)
+            return self._failed(
+                name, solver_options, status, str(self.problem.status), t0, raise_on_failure
+            )
         x = np.asarray(x, dtype=np.float64).ravel()
         y = (
             np.zeros(self.A.shape[0])

@@ -64,7 +64,9 @@ class RLP(RowsLP):
                 f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
             )
         if cost is not None and partition_cost is not None:
-            raise ValidationError("give cost (per state) or partition_cost (per partition), not both")
+            raise ValidationError(
+                "give cost (per state) or partition_cost (per partition), not both"
+            )
         self.mdp = mdp
         self.partition = partition
         if partition_cost is not None:
