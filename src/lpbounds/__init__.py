@@ -21,6 +21,7 @@ from .dp import (
     greedy_policy,
     porteus_bounds,
     solve_exact,
+    solve_game,
 )
 from .errors import (
     ConvergenceError,
@@ -59,4 +60,5 @@ __all__ = [
     "porteus_bounds",
     "random_partition",
     "solve_exact",
+    "solve_game",
 ]

@@ -49,6 +49,7 @@ __all__ = [
     "greedy_policy",
     "porteus_bounds",
     "solve_exact",
+    "solve_game",
 ]
 
 Model = FiniteMDP | BellmanRows
@@ -278,14 +279,16 @@ def _iterate(
     eval_sweeps: int,
     extrapolate: bool,
     callback: Callback | None,
+    game: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
     lam = rows.discount
+    apply = rows.apply_maxmin if game else rows.apply_max
     sweeps = 0
     hist: list[float] = []
     res = np.inf
     arg = np.zeros(rows.n_vars, dtype=np.int64)
     for it in range(max_iter + 1):
-        tv, arg = rows.apply_max(v)
+        tv, arg = apply(v)
         sweeps += 1
         r = tv - v
         lo, hi = float(r.min()), float(r.max())
@@ -355,6 +358,54 @@ def _policy_iteration(
         pol = new
     tv, arg = rows.apply_max(v)
     return v, arg, float(np.abs(tv - v).max()), max_iter, sweeps, False, hist
+
+
+def solve_game(
+    rows: BellmanRows,
+    *,
+    tol: float | None = None,
+    max_iter: int = 100_000,
+    initial: Any = None,
+    callback: Callback | None = None,
+    raise_on_failure: bool = True,
+) -> DPResult:
+    r"""Fixed point of ``(Gw)(i) = max_u min_{r in (i, u)} q_r(w)`` (Fact 2, :mod:`lpbounds.rows`).
+
+    The least element of the disjunctive NLP's feasible set (eq. 25) when ``rows`` are
+    the NLP's terms (``BellmanRows.aggregate(mdp, partition, reduce="min")``): the value
+    of the zero-sum game in which the controller picks the action and an adversary the
+    state of the partition. Value iteration with the Porteus shift (valid for ``G``:
+    monotone, and ``G(w + c) = Gw + lambda c``); stops when ``||Gw - w||_inf <= tol``.
+
+    Returns
+    -------
+    DPResult
+        ``policy``/``policy_rows``: the minimising row of the first maximising action.
+    """
+    t0 = time.perf_counter()
+    tol_ = _default_tol(rows, tol)
+    v = np.zeros(rows.n_vars) if initial is None else rows._vec(initial).copy()
+    v, arg, res, its, sweeps, ok, hist = _iterate(
+        rows, v, tol_, max_iter, 0, True, callback, game=True
+    )
+    if not ok and raise_on_failure:
+        raise ConvergenceError(
+            f"game value iteration stopped after {its} iterations with residual {res:.3e}"
+        )
+    return DPResult(
+        values=v,
+        policy=arg,
+        policy_rows=arg,
+        residual=res,
+        error_bound=res / (1.0 - rows.discount),
+        tol=tol_,
+        iterations=its,
+        sweeps=sweeps,
+        seconds=time.perf_counter() - t0,
+        method="game-vi",
+        converged=ok,
+        history=hist,
+    )
 
 
 # ---------------------------------------------------------------------- evaluation

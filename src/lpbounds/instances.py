@@ -45,10 +45,12 @@ __all__ = ["MODEL_KINDS", "PARTITION_KINDS", "Instance", "load_instance", "model
 #: kind -> "module:function(config: dict) -> FiniteMDP"
 MODEL_KINDS: dict[str, str] = {
     "garnet": "lpbounds.instances:_build_garnet",
+    "patrol": "lpbounds.patrol.instance:build_mdp",
 }
 #: kind -> "module:function(config: dict, instance: Instance) -> Partition"
 PARTITION_KINDS: dict[str, str] = {
     "random": "lpbounds.instances:_build_random_partition",
+    "patrol": "lpbounds.patrol.instance:build_partition",
 }
 
 
