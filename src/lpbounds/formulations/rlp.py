@@ -80,4 +80,5 @@ class RLP(RowsLP):
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         values, _, mu, extra = super()._interpret(x, y)
+        extra = {**extra, "mdp": self.mdp, "partition": self.partition}
         return values, self.partition.lift(values), mu, extra

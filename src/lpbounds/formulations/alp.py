@@ -1,0 +1,160 @@
+r"""The approximate LP with a general basis (paper eq. 10 with any ``Phi``; Remark 2).
+
+.. math:: ALP := \min c^T \Phi r \quad\text{s.t.}\quad \Phi r \ge R_u + \lambda P_u \Phi r
+          \quad \forall u.
+
+Every feasible ``Phi r`` satisfies the Bellman inequalities, so ``Phi r >= V*``
+(Lemma 1): the optimum is an upper bound on ``V*``. With the 0/1 basis of a partition
+(eq. 11) this is RLP, whose optimum does not depend on ``c`` (Theorem 1). With a
+general basis it does: Remark 2 recalls that under *soft aggregation* (``Phi >= 0``
+with rows summing to one, Singh et al.) the optimum depends on the cost (de Farias and
+Van Roy 2003). :func:`find_cost_dependent_alp` finds a small seeded instance that shows
+it, so Theorem 1's special structure can be seen by contrast.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..dp import exact_rows
+from ..errors import ValidationError
+from ..mdp import FiniteMDP
+from .base import Formulation, LPResult, check_cost
+
+__all__ = ["ALP", "CostDependenceExample", "find_cost_dependent_alp", "soft_aggregation_basis"]
+
+
+def _check_basis(basis: Any, n: int) -> sp.csr_matrix:
+    if sp.issparse(basis):
+        phi = sp.csr_matrix(basis, dtype=np.float64)
+    else:
+        arr = np.asarray(basis, dtype=np.float64)
+        if arr.ndim != 2:
+            raise ValidationError(
+                f"basis must be a 2-d (n_states, K) matrix; got shape {arr.shape}"
+            )
+        phi = sp.csr_matrix(arr)
+    if phi.shape[0] != n or phi.shape[1] < 1:
+        raise ValidationError(
+            f"basis must have shape (n_states, K) = ({n}, K >= 1); got {phi.shape}"
+        )
+    if not np.all(np.isfinite(phi.data)):
+        raise ValidationError("basis entries must be finite")
+    return phi
+
+
+class ALP(Formulation):
+    r"""The approximate LP ``min c' Phi r  s.t.  Phi r >= R_u + lambda P_u Phi r`` (eq. 10).
+
+    An upper bound ``Phi r* >= V*`` whose optimum, unlike RLP's, depends on the cost
+    ``c`` in general (Remark 2). There is therefore no cost-free ``fixed_point``.
+
+    Parameters
+    ----------
+    mdp : FiniteMDP
+    basis : array_like or sparse matrix (n_states, K)
+        ``Phi``. The LP is infeasible unless some ``Phi r`` satisfies the Bellman
+        inequalities (true when the constant vector is in the span, e.g. soft
+        aggregation); :meth:`solve` then reports it.
+    cost : array_like (n_states,), optional
+        ``c >= 0`` (default ones); the objective is ``(Phi' c)' r``.
+
+    Notes
+    -----
+    Result: ``values`` is ``r``, ``state_values`` is ``Phi r``, ``mu`` the duals per
+    (state, action).
+    """
+
+    name = "ALP"
+
+    def __init__(self, mdp: FiniteMDP, basis: Any, cost: Any = None) -> None:
+        self.mdp = mdp
+        self.basis = _check_basis(basis, mdp.n_states)
+        c = check_cost(cost, mdp.n_states)
+        self.rows = exact_rows(mdp)
+        a_exact, b = self.rows.constraint_matrix()
+        super().__init__(a_exact @ self.basis, b, np.asarray(self.basis.T @ c).ravel())
+
+    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+        return x, np.asarray(self.basis @ x).ravel(), self.rows.pair_values(y), {}
+
+
+def soft_aggregation_basis(n_states: int, n_features: int, seed: int | None = 0) -> np.ndarray:
+    """A random soft-aggregation basis: positive entries, each row summing to one (Remark 2)."""
+    if n_features < 1 or n_states < 1:
+        raise ValidationError("n_states and n_features must be >= 1")
+    rng = np.random.default_rng(seed)
+    return rng.dirichlet(np.ones(n_features), size=n_states)
+
+
+@dataclass
+class CostDependenceExample:
+    """A small instance on which the ALP optimum changes with the cost (Remark 2).
+
+    ``first`` is optimal for ``cost1``; ``second`` for ``cost2``; ``second`` is *not*
+    optimal for ``cost1``: ``cost1' Phi r2 - cost1' Phi r1 = excess > tolerance``
+    (so the difference is not a tie between alternative optima).
+    """
+
+    seed: int
+    mdp: FiniteMDP
+    basis: np.ndarray
+    cost1: np.ndarray
+    cost2: np.ndarray
+    first: LPResult
+    second: LPResult
+    excess: float
+    tolerance: float
+
+    @property
+    def deviation(self) -> float:
+        """``max |Phi r1 - Phi r2|``."""
+        assert self.first.state_values is not None and self.second.state_values is not None
+        return float(np.abs(self.first.state_values - self.second.state_values).max())
+
+
+def find_cost_dependent_alp(
+    seed: int = 0,
+    *,
+    max_tries: int = 200,
+    n_states: int = 6,
+    n_actions: int = 2,
+    n_features: int = 2,
+    solver: str = "HIGHS",
+    rtol: float = 1e-6,
+) -> CostDependenceExample:
+    """Search seeded small random MDPs and soft-aggregation bases for cost dependence.
+
+    Try ``seed, seed + 1, ...``: a Garnet MDP, a random soft-aggregation basis and two
+    positive random costs; return the first instance where the optimum for ``cost2``
+    is worse than the optimum for ``cost1`` under ``cost1`` by more than
+    ``rtol * max(1, |cost1' Phi r1|)``.
+
+    Raises
+    ------
+    LPBoundsError
+        If ``max_tries`` instances show no dependence (never observed for the defaults).
+    """
+    from ..errors import LPBoundsError
+    from ..generators import garnet
+
+    for k in range(max_tries):
+        s = seed + k
+        mdp = garnet(n_states, n_actions, 2, 0.9, seed=s)
+        rng = np.random.default_rng(10_000 + s)
+        basis = soft_aggregation_basis(n_states, n_features, seed=20_000 + s)
+        # two positive costs that weight different states heavily
+        c1 = 0.01 + rng.dirichlet(np.full(n_states, 0.3)) * n_states
+        c2 = 0.01 + rng.dirichlet(np.full(n_states, 0.3)) * n_states
+        r1 = ALP(mdp, basis, c1).solve(solver)
+        r2 = ALP(mdp, basis, c2).solve(solver)
+        assert r1.state_values is not None and r2.state_values is not None
+        excess = float(c1 @ r2.state_values - c1 @ r1.state_values)
+        tol = rtol * max(1.0, abs(r1.objective))
+        if excess > tol:
+            return CostDependenceExample(s, mdp, basis, c1, c2, r1, r2, excess, tol)
+    raise LPBoundsError(f"no cost dependence found in {max_tries} tries from seed {seed}")

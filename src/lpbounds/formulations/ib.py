@@ -1,0 +1,217 @@
+r"""Lifted restricted LPs (paper Section 3.2): the iterated-Bellman LP (eq. 20-22) and LLP (eq. 18).
+
+Theorem 2 and the remark before it say that neither lifting improves RLP's bound:
+every feasible point of either LP has ``v_j >= v*`` (each block, for IB) or ``v >= v*``
+(for LLP), where ``v*`` is RLP's optimum.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import ValidationError
+from ..mdp import FiniteMDP
+from ..partition import Partition
+from ..rows import BellmanRows
+from .base import Formulation, check_cost
+from .rows_lp import RowsLP
+
+__all__ = ["IB", "LLP"]
+
+
+def _check_partition(mdp: FiniteMDP, partition: Partition) -> None:
+    if partition.n_states != mdp.n_states:
+        raise ValidationError(
+            f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
+        )
+
+
+class IB(RowsLP):
+    r"""The iterated-Bellman lifted LP over partitions (eq. 20-22), ``L >= 1`` blocks.
+
+    .. math:: IB := \min \sum_{j=1}^L \bar c^T v_j \quad\text{s.t.}\quad
+       v_{j+1}(i) \ge R_u(x) + \lambda \sum_l p_l\, v_j(\bar f(x,u,Y_l))
+       \ (j = 1..L-1), \qquad
+       v_1(i) \ge R_u(x) + \lambda \sum_l p_l\, v_L(\bar f(x,u,Y_l)),
+
+    for all ``x in S_i``, ``i``, ``u``. Theorem 2: every feasible ``(v_1, ..., v_L)`` has
+    ``v_j >= v*`` (RLP's optimum) for every ``j``, so lifting with iterated Bellman
+    inequalities gives no better upper bound. ``L = 1`` is RLP itself.
+
+    The rows are RLP's (merged) aggregated rows, one copy per block, with owner in
+    block ``j+1`` and targets in block ``j`` (cyclically): a row system on ``L * M``
+    variables, whose least feasible point (Fact 1 of :mod:`lpbounds.rows`, so the LP's
+    optimum for every ``c >= 0``) is ``(v*, ..., v*)`` (:meth:`fixed_point`).
+
+    Parameters
+    ----------
+    mdp : FiniteMDP
+    partition : Partition
+    L : int
+        Number of blocks, ``>= 1``.
+    cost : array_like (n_states,), optional
+        ``c(x) >= 0`` (default ones); every block gets the cost ``c-bar``.
+
+    Notes
+    -----
+    Result: ``values`` is ``v_1``, ``extra["blocks"]`` the (L, M) array of all blocks,
+    ``extra["block_mu"]`` the (L, n, A) pair duals of each block's rows and ``mu`` their
+    sum over blocks.
+    """
+
+    name = "IB"
+
+    def __init__(self, mdp: FiniteMDP, partition: Partition, L: int, cost: Any = None) -> None:
+        _check_partition(mdp, partition)
+        if isinstance(L, bool) or not isinstance(L, (int, np.integer)) or L < 1:
+            raise ValidationError(f"L must be an integer >= 1; got {L!r}")
+        self.mdp = mdp
+        self.partition = partition
+        self.L = int(L)
+        c = check_cost(cost, mdp.n_states)
+        cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
+        self.base_rows = BellmanRows.aggregate(mdp, partition, reduce="max")
+        super().__init__(_cyclic_rows(self.base_rows, self.L), np.tile(cbar, self.L))
+
+    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+        m = self.partition.n_partitions
+        blocks = x.reshape(self.L, m)
+        yb = y.reshape(self.L, self.base_rows.n_rows)
+        block_mu = np.stack([self.base_rows.pair_values(yj) for yj in yb])
+        extra = {"blocks": blocks, "block_mu": block_mu}
+        return blocks[0], self.partition.lift(blocks[0]), block_mu.sum(axis=0), extra
+
+    def fixed_point(self, tol: float | None = None) -> np.ndarray:
+        """``(v*, ..., v*)`` stacked as an (L, M) array, ``v*`` = RLP's fixed point (Lemma 1)."""
+        from ..dp import solve_exact
+
+        v = solve_exact(self.base_rows, tol=tol).values
+        return np.tile(v, (self.L, 1))
+
+
+def _cyclic_rows(rows: BellmanRows, L: int) -> BellmanRows:
+    """``L`` copies of ``rows``: copy ``j`` owned by block ``j``, targets in block ``j-1 mod L``."""
+    m, r = rows.n_vars, rows.n_rows
+    blk = np.repeat(np.arange(L, dtype=np.int64), r)
+    owner = np.tile(rows.owner.astype(np.int64), L) + blk * m
+    src = (blk - 1) % L
+    targets = np.tile(rows.targets.astype(np.int64), (L, 1)) + src[:, None] * m
+    probs = np.asarray(rows.probs)
+    probs = (
+        np.broadcast_to(probs[0], targets.shape)
+        if probs.strides[0] == 0
+        else np.tile(probs, (L, 1))
+    )
+    return BellmanRows.from_arrays(
+        owner,
+        np.tile(rows.action, L),
+        np.tile(rows.reward, L),
+        targets,
+        probs,
+        rows.discount,
+        L * m,
+    )
+
+
+class LLP(Formulation):
+    r"""A lifted restricted LP of the form of eq. 18, with surplus variables as the lifting.
+
+    .. math:: LLP := \min \bar c^T v + d^T z \quad\text{s.t.}\quad
+       V(x) \ge R_u(x) + \lambda \sum_l p_l V(f(x,u,Y_l)),\quad V(x) = v(i)\ (x \in S_i),
+       \quad z \ge 0.
+
+    The paper leaves the lifting ``z`` generic. lpbounds makes it concrete: ``z`` has
+    one entry per allowed (state, action) pair, the **surplus** of that pair's Bellman
+    inequality (eq. 18 in standard form),
+
+    .. math:: z_u(x) = V(x) - R_u(x) - \lambda \sum_l p_l V(f(x,u,Y_l)) \;\ge\; 0,
+
+    with ``V = Phi v`` substituted (eq. 18's second constraint). So the variables are
+    ``(v, z)`` (``M + #pairs``), the constraints ``A_pair v - z = R`` (two inequalities
+    each) and ``z >= 0``, and the cost ``d >= 0`` prices the surplus: a positive ``d``
+    rewards points where the Bellman inequalities are tight, which is the hope of a
+    lifting, yet the projection of the feasible set onto ``v`` is exactly RLP's feasible
+    set, so (the argument after eq. 18, Theorem 2's companion) every optimal
+    ``(v~, z~)`` has ``v~ >= v*`` and ``Phi v~ >= Phi v*``: no better bound. Since
+    ``z = A_pair v - R``, the objective is ``g' v - d' R`` with the effective cost
+    ``g = c-bar + A_pair' d``: when ``g >= 0`` the optimal ``v`` is ``v*`` again (Fact 1
+    of :mod:`lpbounds.rows`); when ``g`` has negative entries it may be larger than
+    ``v*``, never smaller.
+
+    Parameters
+    ----------
+    mdp : FiniteMDP
+    partition : Partition
+    d : array_like (n_states, n_actions)
+        Cost of the surplus variables, ``>= 0`` (entries of disallowed pairs ignored).
+    cost : array_like (n_states,), optional
+        ``c(x) >= 0`` (default ones).
+
+    Notes
+    -----
+    Result: ``values`` is ``v``, ``extra["z"]`` the surplus per pair (shape (n, A), 0 on
+    disallowed pairs). ``mu`` is the dual of the equality rows ``y+ - y-`` per pair (its
+    sign is free).
+    """
+
+    name = "LLP"
+
+    def __init__(self, mdp: FiniteMDP, partition: Partition, d: Any, cost: Any = None) -> None:
+        _check_partition(mdp, partition)
+        self.mdp = mdp
+        self.partition = partition
+        n, n_actions = mdp.n_states, mdp.n_actions
+        d_arr = np.asarray(d, dtype=np.float64)
+        if d_arr.shape != (n, n_actions):
+            raise ValidationError(f"d must have shape {(n, n_actions)}; got {d_arr.shape}")
+        if not np.all(np.isfinite(d_arr)):
+            raise ValidationError("d must be finite")
+        if (d_arr < 0).any():
+            x, u = (int(t) for t in np.argwhere(d_arr < 0)[0])
+            raise ValidationError(f"d[{x}, {u}] = {d_arr[x, u]} is negative; d must be >= 0")
+        self.d = np.where(mdp.allowed, d_arr, 0.0)
+        c = check_cost(cost, n)
+        m = partition.n_partitions
+        cbar = np.bincount(partition.labels, weights=c, minlength=m)
+        rows = BellmanRows.aggregate(mdp, partition, reduce="max")
+        a_rows, _ = rows.constraint_matrix()
+        self.pairs = np.argwhere(mdp.allowed)  # (x, u) of each z entry, row-major
+        xs, us = self.pairs[:, 0], self.pairs[:, 1]
+        a_pair = a_rows[rows.pair_row[xs, us]]  # row of pair (x,u) with ITS reward below
+        b_pair = mdp.rewards[xs, us]
+        k = xs.size
+        eye = sp.identity(k, format="csr")
+        a = sp.vstack(
+            [
+                sp.hstack([a_pair, -eye]),
+                sp.hstack([-a_pair, eye]),
+                sp.hstack([sp.csr_matrix((k, m)), eye]),
+            ],
+            format="csr",
+        )
+        b = np.concatenate([b_pair, -b_pair, np.zeros(k)])
+        self.rows = rows
+        self._m = m
+        super().__init__(a, b, np.concatenate([cbar, self.d[xs, us]]))
+
+    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+        m, k = self._m, self.pairs.shape[0]
+        v = x[:m]
+        z = np.zeros(self.d.shape)
+        z[self.pairs[:, 0], self.pairs[:, 1]] = x[m:]
+        mu = np.zeros(self.d.shape)
+        mu[self.pairs[:, 0], self.pairs[:, 1]] = y[:k] - y[k : 2 * k]
+        return v, self.partition.lift(v), mu, {"z": z}
+
+    def fixed_point(self, tol: float | None = None) -> np.ndarray:
+        """``v*``: the least element of the projection of LLP's feasible set onto ``v``.
+
+        That projection is RLP's feasible set, so this is RLP's fixed point; it is
+        LLP's optimal ``v`` when ``d = 0`` and a lower bound on it for every ``d >= 0``.
+        """
+        from ..dp import solve_exact
+
+        return solve_exact(self.rows, tol=tol).values
