@@ -37,7 +37,7 @@ import scipy.sparse.linalg as spla
 from .errors import ConvergenceError, ValidationError
 from .mdp import FiniteMDP
 from .rows import BellmanRows
-from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale
+from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
 
 __all__ = [
     "DPResult",
@@ -126,7 +126,9 @@ class DPResult:
     residual : float
         ``||T values - values||_inf``, measured on the returned vector.
     error_bound : float
-        ``residual / (1 - discount)``, a bound on ``||values - V*||_inf``.
+        ``(residual + slack) / (1 - discount)``, a bound on ``||values - V*||_inf``; the
+        slack of a few ulps of ``max|V|`` covers the rounding of the residual itself
+        (:func:`lpbounds.tolerances.error_bound`).
     tol : float
         The stopping tolerance on ``residual``.
     iterations : int
@@ -256,7 +258,7 @@ def solve_exact(
         policy=_policy_out(model, rows, arg),
         policy_rows=arg,
         residual=res,
-        error_bound=res / (1.0 - rows.discount),
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), rows.discount),
         tol=tol_,
         iterations=its,
         sweeps=sweeps,
@@ -397,7 +399,7 @@ def solve_game(
         policy=arg,
         policy_rows=arg,
         residual=res,
-        error_bound=res / (1.0 - rows.discount),
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), rows.discount),
         tol=tol_,
         iterations=its,
         sweeps=sweeps,
@@ -442,7 +444,7 @@ def _evaluate_rows(
     return PolicyEvaluation(
         values=v,
         residual=res,
-        error_bound=res / (1.0 - lam),
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), lam),
         method=method,
         sweeps=sweeps,
         seconds=time.perf_counter() - t0,

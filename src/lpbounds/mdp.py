@@ -182,7 +182,8 @@ class FiniteMDP:
             total = p.sum()
             if abs(total - 1.0) > PROBABILITY_SUM_ATOL:
                 raise ValidationError(
-                    f"{where} sum to {total!r}, not 1 (tolerance {PROBABILITY_SUM_ATOL:g})"
+                    f"{where} sum to {float(total):.12g}, not 1 "
+                    f"(tolerance {PROBABILITY_SUM_ATOL:g})"
                 )
             return np.clip(p, 0.0, None)
         if p.shape != shape:
@@ -205,7 +206,7 @@ class FiniteMDP:
         if off.any():
             x, u = _first(off)
             raise ValidationError(
-                f"probabilities[{x}, {u}, :] sum to {sums[x, u]!r}, not 1 "
+                f"probabilities[{x}, {u}, :] sum to {float(sums[x, u]):.12g}, not 1 "
                 f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(off.sum())} such pairs)"
             )
         p = np.clip(p, 0.0, None)

@@ -37,3 +37,54 @@ LP_COMPARE_RTOL: float = 1e-6
 def dp_scale(rewards_absmax: float, discount: float) -> float:
     """Scale of the value function, ``max|R| / (1 - discount)`` (at least 1e-300)."""
     return max(float(rewards_absmax) / (1.0 - float(discount)), 1e-300)
+
+
+# ---------------------------------------------------------------------- NLP (eq. 25)
+#: Default relative gap at which the NLP's cutting-plane loop stops:
+#: ``upper - lower <= NLP_GAP_RTOL * max(1, |upper|)`` on the bracket of ``c'w*``. The
+#: measured runs (docs/nlp.md) close to 1e-6 in 5-90 rounds where they converge; a
+#: smaller target mostly adds stalled rounds.
+NLP_GAP_RTOL: float = 1e-6
+
+#: A disjunction counts as violated by the master's ``w`` when
+#: ``min_terms q_t(w) - w(i) > NLP_VIOLATION_RTOL * scale`` (``scale = max|R| / (1 -
+#: discount)``): well above HiGHS' feasibility tolerance (1e-7 absolute on rows whose
+#: coefficients are O(1)), so a solver's round-off is never chased with cuts.
+NLP_VIOLATION_RTOL: float = 1e-9
+
+#: Safety margin of a cut's right-hand side. After the cut ``alpha'w >= beta`` is
+#: rescaled to ``max|alpha| = 1``, ``beta`` is recomputed as the smallest of the
+#: rigorous (weak-duality) lower bounds on ``min alpha'w`` over each term's polyhedron
+#: and then lowered by ``NLP_CUT_SAFETY_RTOL * max(1, |beta|)``. The weak-duality bound is
+#: valid for any multipliers, so the margin only has to cover floating-point rounding in
+#: evaluating it (about 1e-15 relative per term); 1e-9 is a million times that.
+NLP_CUT_SAFETY_RTOL: float = 1e-9
+
+#: A cut is added only if, after rescaling and the exact right-hand side, it cuts the
+#: master's point off by more than ``NLP_CUT_MIN_DEPTH_RTOL * scale``; shallower cuts
+#: do not move the master and only make it larger.
+NLP_CUT_MIN_DEPTH_RTOL: float = 1e-9
+
+#: Strategy iteration switches a disjunction to another term only when that term is
+#: smaller by more than ``NLP_SWITCH_RTOL * scale`` at the current values: ties keep the
+#: current term, which is what makes the method finite in floating point.
+NLP_SWITCH_RTOL: float = 1e-12
+
+#: Relative MILP gap asked of HiGHS for ``method="milp"`` (its default, 1e-4, is far
+#: too loose for a bound that is compared with exact methods to 1e-9).
+NLP_MILP_GAP_RTOL: float = 1e-10
+
+
+#: Multiple of machine epsilon (times ``max|V|``) added to a measured Bellman residual
+#: before it is turned into an error bound: the residual is computed in floating point,
+#: and on chains where the bound ``residual / (1 - discount)`` is attained (absorbing
+#: states) rounding alone would otherwise make the reported bound a few ulps too small.
+ROUNDING_ULPS: float = 8.0
+
+
+def error_bound(residual: float, values_absmax: float, discount: float) -> float:
+    """Bound on ``||V - V*||``: ``(residual + ROUNDING_ULPS eps max(1, max|V|)) / (1 - lambda)``."""
+    import numpy as np
+
+    slack = ROUNDING_ULPS * float(np.finfo(np.float64).eps) * max(1.0, float(values_absmax))
+    return (float(residual) + slack) / (1.0 - float(discount))

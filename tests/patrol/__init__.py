@@ -1,0 +1,1 @@
+"""Tests (a package, so test modules may share helpers and repeat basenames)."""

@@ -1,0 +1,187 @@
+"""Exact DP against closed forms, a direct linear solve, and plain-numpy references."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import lpbounds as lb
+from lpbounds.errors import ConvergenceError, ValidationError
+
+from .conftest import reference_bellman, reference_solve, two_state_closed_form, two_state_mdp
+
+METHODS = ["mpi", "vi", "pi"]
+
+
+def direct_policy_value(mdp, policy):
+    """V_pi by a sparse LU of (I - lam P_pi) V = R_pi built from to_matrices()."""
+    P, R = mdp.to_matrices(disallowed_reward=-1e9)
+    n = mdp.n_states
+    rows = sp.vstack([P[policy[x]][x] for x in range(n)]).tocsc()
+    a = sp.identity(n, format="csc") - mdp.discount * rows
+    return spla.spsolve(a, R[np.arange(n), policy])
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("discount", [0.0, 0.5, 0.9, 0.99])
+def test_two_state_closed_form(method, discount):
+    res = lb.solve_exact(two_state_mdp(discount), method)
+    want = two_state_closed_form(discount)
+    np.testing.assert_allclose(res.values, want, rtol=1e-9, err_msg=f"{method} lam={discount}")
+    assert res.residual <= res.tol
+    # at lam = 0.5 staying (1/(1-lam) = 2) beats moving (lam * 4 = 2)? a tie: lowest action
+    expected_action = 0 if 1.0 / (1 - discount) >= discount * 2 / (1 - discount) else 1
+    assert res.policy[0] == expected_action
+
+
+def test_two_state_chain_with_probabilities():
+    # state 0: reward r, to 1 w.p. p else stay; state 1: absorbing with reward s
+    lam, p, r, s = 0.8, 0.3, 1.0, 5.0
+    succ = np.array([[[1, 0]], [[1, 1]]])
+    probs = np.array([[[p, 1 - p]], [[0.5, 0.5]]])
+    mdp = lb.FiniteMDP(succ, probs, np.array([[r], [s]]), lam)
+    v1 = s / (1 - lam)
+    v0 = (r + lam * p * v1) / (1 - lam * (1 - p))
+    for m in METHODS:
+        res = lb.solve_exact(mdp, m)
+        err = np.abs(res.values - [v0, v1]).max()
+        assert err <= res.error_bound, (m, err, res.error_bound)
+        tight = lb.solve_exact(mdp, m, tol=1e-13)
+        np.testing.assert_allclose(tight.values, [v0, v1], rtol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_methods_agree_with_direct_solve(seed):
+    mdp = lb.garnet(80, 3, 4, 0.95, seed=seed, allowed_fraction=0.7)
+    results = {m: lb.solve_exact(mdp, m) for m in METHODS}
+    ref = reference_solve(mdp)
+    for m, res in results.items():
+        assert res.converged
+        assert np.abs(res.values - ref).max() <= res.error_bound + 1e-10, m
+        # the reported residual is the true residual of the returned vector
+        q = reference_bellman(mdp, res.values)
+        assert np.abs(q.max(axis=1) - res.values).max() == pytest.approx(res.residual, abs=1e-12)
+        # the greedy policy's value, by an independent direct solve, is V* (unique optimum)
+        v_pi = direct_policy_value(mdp, res.policy)
+        np.testing.assert_allclose(v_pi, ref, atol=1e-8)
+
+
+@pytest.mark.parametrize("method", ["vi", "mpi"])
+def test_error_bound_bounds_the_error(method):
+    mdp = lb.garnet(60, 2, 3, 0.9, seed=11)
+    exact = reference_solve(mdp)
+    for tol in (1e-1, 1e-3, 1e-6):
+        res = lb.solve_exact(mdp, method, tol=tol, extrapolate=False)
+        err = np.abs(res.values - exact).max()
+        assert res.residual <= tol
+        assert err <= res.error_bound * (1 + 1e-12), (tol, err, res.error_bound)
+        # and the lambda/(1-lambda) bound holds for one more application of T
+        tv = reference_bellman(mdp, res.values).max(axis=1)
+        assert np.abs(tv - exact).max() <= 0.9 / 0.1 * res.residual * (1 + 1e-12)
+
+
+def test_extrapolation_reduces_sweeps_not_accuracy():
+    mdp = lb.garnet(200, 3, 5, 0.99, seed=3)
+    plain = lb.solve_exact(mdp, "vi", extrapolate=False)
+    fast = lb.solve_exact(mdp, "vi")
+    assert fast.sweeps < plain.sweeps / 5
+    exact = reference_solve(mdp)
+    assert np.abs(fast.values - exact).max() <= fast.error_bound
+
+
+def test_convergence_error_names_the_residual():
+    mdp = lb.garnet(30, 2, 2, 0.99, seed=1)
+    with pytest.raises(ConvergenceError, match="residual"):
+        lb.solve_exact(mdp, "vi", max_iter=2, extrapolate=False)
+    res = lb.solve_exact(mdp, "vi", max_iter=2, extrapolate=False, raise_on_failure=False)
+    assert not res.converged and res.residual > res.tol
+
+
+def test_bad_arguments():
+    mdp = two_state_mdp()
+    with pytest.raises(ValidationError, match="unknown method"):
+        lb.solve_exact(mdp, "newton")
+    with pytest.raises(ValidationError, match="tol"):
+        lb.solve_exact(mdp, tol=-1.0)
+    with pytest.raises(ValidationError, match="not allowed in state 1"):
+        lb.evaluate_policy(mdp, np.array([0, 1]))
+    with pytest.raises(ValidationError, match="not an action index"):
+        lb.evaluate_policy(mdp, np.array([0, 5]))
+    with pytest.raises(ValidationError, match="expected a vector of length 2"):
+        lb.greedy_policy(mdp, np.zeros(3))
+
+
+@pytest.mark.parametrize("method", ["direct", "iterative"])
+def test_policy_evaluation(method):
+    mdp = lb.garnet(70, 3, 3, 0.9, seed=9)
+    pol = np.random.default_rng(0).integers(0, 3, 70)
+    ev = lb.evaluate_policy(mdp, pol, method=method)
+    want = direct_policy_value(mdp, pol)
+    assert np.abs(ev.values - want).max() <= ev.error_bound + 1e-12
+    assert ev.residual <= 1e-10 * mdp.reward_absmax / 0.1 + 1e-15
+
+
+def test_greedy_tie_rule_lowest_action():
+    # two identical actions everywhere: every Q-value ties, the lowest index wins
+    succ = np.array([[[1], [1], [0]], [[0], [0], [1]]])
+    rewards = np.array([[1.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
+    mdp = lb.FiniteMDP(succ, [1.0], rewards, 0.5)
+    v = lb.solve_exact(mdp).values
+    np.testing.assert_array_equal(lb.greedy_policy(mdp, v), [0, 0])
+    # a difference below the documented tie tolerance still counts as a tie
+    eps = 0.1 * lb.tolerances.GREEDY_TIE_RTOL
+    mdp2 = lb.FiniteMDP(succ, [1.0], rewards + np.array([[0, eps, 0], [0, 0, 0]]), 0.5)
+    assert lb.greedy_policy(mdp2, v)[0] == 0
+    mdp3 = lb.FiniteMDP(succ, [1.0], rewards + np.array([[0, 1e-6, 0], [0, 0, 0]]), 0.5)
+    assert lb.greedy_policy(mdp3, v)[0] == 1
+
+
+def test_porteus_bounds_sandwich():
+    mdp = lb.garnet(60, 3, 3, 0.9, seed=12)
+    exact = reference_solve(mdp)
+    v = exact + np.random.default_rng(3).normal(scale=0.5, size=60)
+    pb = lb.porteus_bounds(mdp, v)
+    v_pi = direct_policy_value(mdp, pb.policy)
+    tol = 1e-9
+    assert np.all(pb.lower_paper <= pb.lower + tol)
+    assert np.all(pb.lower <= v_pi + tol)
+    assert np.all(v_pi <= exact + tol)
+    assert np.all(exact <= pb.upper + tol)
+
+
+def test_solve_on_rows_equals_aggregated_fixed_point_definition(small_mdp, small_partition):
+    rows = lb.BellmanRows.aggregate(small_mdp, small_partition)
+    fp = lb.solve_exact(rows)
+    tv, _ = rows.apply_max(fp.values)
+    assert np.abs(tv - fp.values).max() == pytest.approx(fp.residual, abs=1e-13)
+    # an upper bound on V* (Lemma 3 / Theorem 1)
+    assert np.all(small_partition.lift(fp.values) >= reference_solve(small_mdp) - fp.error_bound)
+
+
+def test_game_value_is_below_min_vstar(small_mdp, small_partition):
+    rows = lb.BellmanRows.aggregate(small_mdp, small_partition, reduce="min")
+    g = lb.solve_game(rows)
+    gw, _ = rows.apply_maxmin(g.values)
+    assert np.abs(gw - g.values).max() <= g.tol
+    vmin = small_partition.aggregate(reference_solve(small_mdp), "min")
+    assert np.all(g.values <= vmin + g.error_bound)
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    n=st.integers(1, 30),
+    a=st.integers(1, 3),
+    ll=st.integers(1, 4),
+    lam=st.sampled_from([0.0, 0.3, 0.9, 0.97]),
+    seed=st.integers(0, 10_000),
+)
+def test_property_all_methods_agree(n, a, ll, lam, seed):
+    mdp = lb.garnet(n, a, ll, lam, seed=seed, allowed_fraction=0.75)
+    ref = reference_solve(mdp)
+    for m in METHODS:
+        res = lb.solve_exact(mdp, m)
+        assert np.abs(res.values - ref).max() <= res.error_bound + 1e-9 * max(1, abs(ref).max())

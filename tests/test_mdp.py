@@ -1,0 +1,188 @@
+"""FiniteMDP: validation at the boundary and pymdptoolbox-style conversions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import lpbounds as lb
+from lpbounds.errors import ValidationError
+
+
+def _arrays(n=3, a=2, ll=2):
+    succ = np.zeros((n, a, ll), dtype=int)
+    succ[..., 1] = 1
+    probs = np.array([0.25, 0.75])
+    rewards = np.arange(n * a, dtype=float).reshape(n, a)
+    return succ, probs, rewards
+
+
+def test_valid_model_properties():
+    succ, probs, rewards = _arrays()
+    mdp = lb.FiniteMDP(succ, probs, rewards, 0.5)
+    assert (mdp.n_states, mdp.n_actions, mdp.n_outcomes) == (3, 2, 2)
+    assert mdp.shared_probabilities
+    assert mdp.n_pairs == 6
+    assert mdp.reward_absmax == 5.0
+    assert not mdp.successors.flags.writeable
+
+
+@pytest.mark.parametrize("discount", [-0.1, 1.0, 1.5, float("nan"), "x"])
+def test_discount_outside_unit_interval(discount):
+    succ, probs, rewards = _arrays()
+    with pytest.raises(ValidationError, match="discount"):
+        lb.FiniteMDP(succ, probs, rewards, discount)
+
+
+def test_successor_out_of_range_is_named():
+    succ, probs, rewards = _arrays()
+    succ[2, 1, 0] = 7
+    with pytest.raises(ValidationError, match=r"successors\[2, 1, 0\] = 7"):
+        lb.FiniteMDP(succ, probs, rewards, 0.9)
+
+
+def test_negative_successor():
+    succ, probs, rewards = _arrays()
+    succ[0, 0, 1] = -1
+    with pytest.raises(ValidationError, match=r"successors\[0, 0, 1\] = -1"):
+        lb.FiniteMDP(succ, probs, rewards, 0.9)
+
+
+def test_probabilities_must_sum_to_one():
+    succ, _, rewards = _arrays()
+    with pytest.raises(ValidationError, match=r"sum to 0\.9"):
+        lb.FiniteMDP(succ, [0.2, 0.7], rewards, 0.9)
+
+
+def test_state_dependent_probabilities_bad_pair_named():
+    succ, _, rewards = _arrays()
+    p = np.full((3, 2, 2), 0.5)
+    p[1, 0] = [0.5, 0.6]
+    with pytest.raises(ValidationError, match=r"probabilities\[1, 0, :\] sum to 1.1"):
+        lb.FiniteMDP(succ, p, rewards, 0.9)
+
+
+def test_negative_probability_named():
+    succ, _, rewards = _arrays()
+    p = np.full((3, 2, 2), 0.5)
+    p[2, 1] = [1.5, -0.5]
+    with pytest.raises(ValidationError, match=r"probabilities\[2, 1, 1\] = -0.5 is negative"):
+        lb.FiniteMDP(succ, p, rewards, 0.9)
+
+
+def test_probability_sum_tolerance_is_the_documented_one():
+    succ, _, rewards = _arrays()
+    tol = lb.tolerances.PROBABILITY_SUM_ATOL
+    lb.FiniteMDP(succ, [0.5, 0.5 + 0.5 * tol], rewards, 0.9)  # inside: accepted
+    with pytest.raises(ValidationError):
+        lb.FiniteMDP(succ, [0.5, 0.5 + 3 * tol], rewards, 0.9)
+
+
+def test_state_without_allowed_action():
+    succ, probs, rewards = _arrays()
+    allowed = np.ones((3, 2), bool)
+    allowed[1] = False
+    with pytest.raises(ValidationError, match="state 1 has no allowed action"):
+        lb.FiniteMDP(succ, probs, rewards, 0.9, allowed)
+
+
+def test_nonfinite_reward_on_allowed_pair_only():
+    succ, probs, rewards = _arrays()
+    rewards[0, 1] = np.nan
+    with pytest.raises(ValidationError, match=r"rewards\[0, 1\] = nan"):
+        lb.FiniteMDP(succ, probs, rewards, 0.9)
+    allowed = np.ones((3, 2), bool)
+    allowed[0, 1] = False
+    mdp = lb.FiniteMDP(succ, probs, rewards, 0.9, allowed)  # ignored where disallowed
+    assert np.isfinite(mdp.rewards).all()
+
+
+def test_shape_mismatches():
+    succ, probs, rewards = _arrays()
+    with pytest.raises(ValidationError, match="rewards must have shape"):
+        lb.FiniteMDP(succ, probs, rewards[:2], 0.9)
+    with pytest.raises(ValidationError, match="probabilities must have shape"):
+        lb.FiniteMDP(succ, [1.0], rewards, 0.9)
+    with pytest.raises(ValidationError, match="successors must have shape"):
+        lb.FiniteMDP(succ[0], probs, rewards, 0.9)
+    with pytest.raises(ValidationError, match="allowed must have shape"):
+        lb.FiniteMDP(succ, probs, rewards, 0.9, np.ones((3, 3), bool))
+
+
+def test_non_integer_successors():
+    succ, probs, rewards = _arrays()
+    with pytest.raises(ValidationError, match="integers"):
+        lb.FiniteMDP(succ + 0.5, probs, rewards, 0.9)
+
+
+def _random_matrices(rng, n, a):
+    mats = []
+    for _ in range(a):
+        m = rng.random((n, n)) * (rng.random((n, n)) < 0.4)
+        m[np.arange(n), rng.integers(0, n, n)] += 0.1
+        mats.append(m / m.sum(axis=1, keepdims=True))
+    return mats
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_from_matrices_round_trip(sparse):
+    rng = np.random.default_rng(1)
+    n, a = 7, 3
+    mats = _random_matrices(rng, n, a)
+    rew = rng.random((n, a))
+    given = [sp.csr_matrix(m) for m in mats] if sparse else np.array(mats)
+    mdp = lb.FiniteMDP.from_matrices(given, rew, 0.8)
+    back, r2 = mdp.to_matrices()
+    for m, b in zip(mats, back, strict=True):
+        np.testing.assert_allclose(b.toarray(), m, atol=1e-15)
+    np.testing.assert_array_equal(r2, rew)
+    # the same V* as a direct solve over all deterministic policies of the matrices
+    v = lb.solve_exact(mdp, "pi").values
+    q = np.stack([rew[:, k] + 0.8 * mats[k] @ v for k in range(a)], axis=1)
+    np.testing.assert_allclose(q.max(axis=1), v, atol=1e-10)
+
+
+def test_from_matrices_transition_rewards_and_state_rewards():
+    rng = np.random.default_rng(2)
+    n, a = 5, 2
+    mats = _random_matrices(rng, n, a)
+    rmat = rng.random((a, n, n))
+    mdp = lb.FiniteMDP.from_matrices(mats, rmat, 0.5)
+    expected = np.stack([(mats[k] * rmat[k]).sum(axis=1) for k in range(a)], axis=1)
+    np.testing.assert_allclose(mdp.rewards, expected, atol=1e-14)
+    state_r = rng.random(n)
+    mdp2 = lb.FiniteMDP.from_matrices(mats, state_r, 0.5)
+    np.testing.assert_array_equal(mdp2.rewards, np.repeat(state_r[:, None], a, axis=1))
+
+
+def test_from_matrices_errors():
+    rng = np.random.default_rng(3)
+    mats = _random_matrices(rng, 4, 2)
+    bad = [m.copy() for m in mats]
+    bad[1][2] = 0.0
+    with pytest.raises(ValidationError, match=r"row 2 of P\[1\] is empty"):
+        lb.FiniteMDP.from_matrices(bad, np.zeros((4, 2)), 0.9)
+    bad = [m.copy() for m in mats]
+    bad[0][3, 0] += 0.2
+    with pytest.raises(ValidationError, match=r"probabilities\[3, 0, :\] sum to"):
+        lb.FiniteMDP.from_matrices(bad, np.zeros((4, 2)), 0.9)
+    with pytest.raises(ValidationError, match="R must have shape"):
+        lb.FiniteMDP.from_matrices(mats, np.zeros((3, 2)), 0.9)
+    with pytest.raises(ValidationError, match=r"P\[1\] has shape"):
+        lb.FiniteMDP.from_matrices([mats[0], np.eye(3)], np.zeros((4, 2)), 0.9)
+
+
+def test_to_matrices_with_disallowed_actions():
+    succ, probs, rewards = _arrays()
+    allowed = np.ones((3, 2), bool)
+    allowed[1, 1] = False
+    mdp = lb.FiniteMDP(succ, probs, rewards, 0.9, allowed)
+    with pytest.raises(ValidationError, match="action 1 is not allowed in state 1"):
+        mdp.to_matrices()
+    P, R = mdp.to_matrices(disallowed_reward=-1e6)
+    assert P[1][1, 1] == 1.0 and R[1, 1] == -1e6
+    # the masked model and the penalised matrices have the same V*
+    v_masked = lb.solve_exact(mdp).values
+    v_pen = lb.solve_exact(lb.FiniteMDP.from_matrices(P, R, 0.9)).values
+    np.testing.assert_allclose(v_masked, v_pen, atol=1e-8)
