@@ -1,0 +1,52 @@
+"""The command line: `lpbounds solve` prints and writes numbers equal to the library's."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import lpbounds as lb
+from lpbounds.cli.main import main
+
+
+def test_help_lists_solve(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    assert "solve" in capsys.readouterr().out
+
+
+def test_solve_writes_the_library_numbers(tmp_path, capsys):
+    out = tmp_path / "s.json"
+    assert main(["solve", "garnet-small", "--json", str(out)]) == 0
+    stats = json.loads(out.read_text())
+    res = lb.solve_exact(lb.load_instance("garnet-small").mdp())
+    assert stats["n_states"] == 300
+    assert stats["residual"] <= stats["tol"]
+    assert stats["value_max"] == pytest.approx(float(np.max(res.values)), abs=2 * res.error_bound)
+    assert "exact solve of garnet-small" in capsys.readouterr().out
+
+
+def test_solve_bad_model_exits_with_one_clear_line(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        '[model]\nkind = "garnet"\nn_states = 3\nn_actions = 1\nbranching = 1\ndiscount = 1.2\n'
+    )
+    assert main(["solve", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert "discount must lie in [0, 1)" in err and "Traceback" not in err
+
+
+def test_console_script_runs():
+    proc = subprocess.run(
+        [sys.executable, "-m", "lpbounds.cli.main", "solve", "garnet-small", "--method", "pi"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "residual" in proc.stdout

@@ -1,0 +1,56 @@
+"""Instance files: loading, lazy building and clear errors for bad files."""
+
+from __future__ import annotations
+
+import pytest
+
+import lpbounds as lb
+from lpbounds.errors import ValidationError
+
+
+def test_load_garnet_small_by_name_and_path():
+    by_name = lb.load_instance("garnet-small")
+    by_path = lb.load_instance(by_name.path)
+    assert by_name.name == "garnet-small"
+    mdp = by_name.mdp()
+    assert (mdp.n_states, mdp.n_actions, mdp.n_outcomes) == (300, 3, 4)
+    assert by_name.partition().n_partitions == 30
+    # seeded: the same file gives the same model
+    assert (by_path.mdp().successors == mdp.successors).all()
+
+
+def test_unknown_key_is_named(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text(
+        '[model]\nkind = "garnet"\nn_states = 5\nn_actions = 2\nbranching = 2\nseeds = 3\n'
+    )
+    with pytest.raises(ValidationError, match=r"unknown key\(s\) \['seeds'\] in \[model\]"):
+        lb.load_instance(f).mdp()
+
+
+def test_missing_key_and_unknown_kind(tmp_path):
+    f = tmp_path / "m.toml"
+    f.write_text('[model]\nkind = "garnet"\nn_states = 5\n')
+    with pytest.raises(ValidationError, match="missing key"):
+        lb.load_instance(f).mdp()
+    g = tmp_path / "k.toml"
+    g.write_text('[model]\nkind = "chess"\n')
+    with pytest.raises(ValidationError, match="unknown model kind 'chess'"):
+        lb.load_instance(g)
+
+
+def test_missing_file_and_bad_toml(tmp_path):
+    with pytest.raises(ValidationError, match="no instance file"):
+        lb.load_instance(tmp_path / "nope.toml")
+    f = tmp_path / "x.toml"
+    f.write_text("[model\n")
+    with pytest.raises(ValidationError, match="not valid TOML"):
+        lb.load_instance(f)
+
+
+def test_instance_without_partition(tmp_path):
+    inst = lb.load_instance(
+        {"model": {"kind": "garnet", "n_states": 4, "n_actions": 1, "branching": 1}}
+    )
+    with pytest.raises(ValidationError, match="no \\[partition\\] table"):
+        inst.partition()
