@@ -1,0 +1,738 @@
+r"""Solver comparison studies: every (instance, formulation, solver, option set) solved.
+
+A study is the cross product of
+
+* instances: ``models/*.toml`` files (or their names), or seeded random sizes written
+  ``garnet:N:M[:SEED]`` (a Garnet MDP with ``N`` states, 3 actions, 4 outcomes,
+  discount 0.9, and a random partition into ``M`` sets, both from ``SEED``, default 0);
+* formulations by their paper name (``"ELP"``, ``"RLP"``, ``"SLP"``, ``"IB"``, ``"ALP"``,
+  ``"UBLP"``, ``"LBLP"``); a name whose class is not importable (not written yet, or an
+  instance it does not apply to) is skipped with a note;
+* solver configurations: a cvxpy solver name with a named option set, written
+  ``SOLVER`` (all option sets of that solver) or ``SOLVER:SET``, e.g. ``HIGHS:ipm``.
+  HiGHS contributes ``simplex``, ``ipm`` (with crossover), ``ipm-nox`` (without) and
+  ``pdlp`` where the installed HiGHS accepts that ``solver`` option; every other
+  installed LP solver runs with its defaults. Missing solvers are skipped with a note.
+
+Each solve is done on a freshly built formulation (so cvxpy's compile time is measured
+every time) with ``raise_on_failure=False``, and gives one row of a
+:class:`pandas.DataFrame` (see :data:`COLUMNS`): status, objective, the maximum
+deviation of the LP's values from the formulation's exact, solver-free counterpart
+(``fixed_point``; for ELP the exact DP's ``V*``), the primal residual lpbounds computed
+on the returned point, compile and solve times, and iterations. The reference itself
+is computed by exact DP to the residual tolerance ``DP_RTOL * max|R| / (1 - lambda)``;
+its error bound is reported in ``reference_error_bound`` so that a deviation below it
+is read as "exact to the reference's accuracy".
+
+Solves run in parallel processes (:class:`concurrent.futures.ProcessPoolExecutor`) by
+default, or on an existing Dask cluster (``scheduler="tcp://host:8786"``; requires the
+optional ``study`` extra, ``pip install lpbounds[study]``). Times measured while other
+solves run on the same cores are noisy: use ``jobs=1`` for timings you want to quote.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import time
+import warnings
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import LPBoundsError, SolverNotInstalledError, ValidationError
+from .tolerances import LP_COMPARE_RTOL
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
+    from .formulations.base import Formulation
+
+__all__ = [
+    "COLUMNS",
+    "DEFAULT_FORMULATIONS",
+    "DEFAULT_INSTANCES",
+    "FORMULATIONS",
+    "SolverConfig",
+    "StudyResult",
+    "available_formulations",
+    "highs_algorithms",
+    "plot_study",
+    "run_study",
+    "save_study",
+    "solver_configs",
+    "summarize",
+]
+
+#: The default study: the teaching instance and two seeded random sizes.
+DEFAULT_INSTANCES: tuple[str, ...] = ("garnet:100:10:1", "garnet-small", "garnet:600:60:2")
+#: Formulations of the default study.
+DEFAULT_FORMULATIONS: tuple[str, ...] = ("ELP", "RLP")
+
+#: Columns of a study's DataFrame, in order.
+COLUMNS: tuple[str, ...] = (
+    "instance",
+    "n_states",
+    "n_partitions",
+    "formulation",
+    "n_rows",
+    "n_vars",
+    "solver",
+    "option_set",
+    "config",
+    "repeat",
+    "status",
+    "objective",
+    "max_deviation",
+    "deviation_tol",
+    "accurate",
+    "reference_error_bound",
+    "primal_residual",
+    "residual_tol",
+    "dual_residual",
+    "gap",
+    "compile_seconds",
+    "solve_seconds",
+    "wall_seconds",
+    "iterations",
+    "note",
+)
+
+
+# ---------------------------------------------------------------------- solvers
+@dataclass(frozen=True)
+class SolverConfig:
+    """A cvxpy solver with a named option set.
+
+    Attributes
+    ----------
+    solver : str
+        cvxpy's name ("HIGHS", "CLARABEL", ...).
+    option_set : str
+        "default", or e.g. "simplex" / "ipm" / "ipm-nox" / "pdlp" for HiGHS.
+    options : dict
+        Keyword arguments for :meth:`Formulation.solve`.
+    """
+
+    solver: str
+    option_set: str = "default"
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def label(self) -> str:
+        """``SOLVER`` or ``SOLVER:SET``."""
+        return self.solver if self.option_set == "default" else f"{self.solver}:{self.option_set}"
+
+
+#: HiGHS option sets: name -> the value of HiGHS' ``solver`` option and extra options.
+#: ``output_flag=False`` keeps PDLP's log off stdout.
+_HIGHS_SETS: dict[str, dict[str, Any]] = {
+    "simplex": {"solver": "simplex"},
+    "ipm": {"solver": "ipm", "run_crossover": "on"},
+    "ipm-nox": {"solver": "ipm", "run_crossover": "off"},
+    "pdlp": {"solver": "pdlp"},
+}
+
+
+@lru_cache(maxsize=1)
+def highs_algorithms() -> tuple[str, ...]:
+    """The values of HiGHS' ``solver`` option that the installed highspy accepts."""
+    try:
+        import highspy
+    except ImportError:  # pragma: no cover - highspy is a dependency
+        return ()
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    return tuple(
+        a
+        for a in ("simplex", "ipm", "pdlp")
+        if h.setOptionValue("solver", a) == highspy.HighsStatus.kOk
+    )
+
+
+def _option_sets(solver: str) -> dict[str, dict[str, Any]]:
+    """The named option sets of an installed solver (name -> solve() keyword arguments)."""
+    if solver == "HIGHS":
+        have = set(highs_algorithms())
+        return {
+            name: {"highs_options": {**opts, "output_flag": False}}
+            for name, opts in _HIGHS_SETS.items()
+            if opts["solver"] in have
+        }
+    return {"default": {}}
+
+
+def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfig], list[str]]:
+    """Expand solver names into configurations, with notes for what is skipped.
+
+    Parameters
+    ----------
+    names : iterable of str, optional
+        ``"HIGHS"`` (every HiGHS option set), ``"HIGHS:ipm"`` (one set), ``"CLARABEL"``,
+        ... (case-insensitive). Default: every installed LP-capable cvxpy solver.
+
+    Returns
+    -------
+    configs : list of SolverConfig
+    notes : list of str
+        One line per solver or option set skipped, and why.
+    """
+    from .formulations.base import INSTALL_HINTS, installed_lp_solvers, resolve_solver
+
+    notes: list[str] = []
+    if names is None:
+        names = installed_lp_solvers()
+        missing = [s for s in INSTALL_HINTS if s not in names and "licence" not in INSTALL_HINTS[s]]
+        missing = [s for s in missing if s not in ("GLPK_MI",)]
+        if missing:
+            notes.append(
+                "not installed, skipped: " + ", ".join(f"{s} ({INSTALL_HINTS[s]})" for s in missing)
+            )
+    configs: list[SolverConfig] = []
+    for spec in names:
+        name, _, opt = str(spec).partition(":")
+        try:
+            solver = resolve_solver(name)
+        except SolverNotInstalledError as exc:
+            notes.append(f"{spec}: skipped: {exc}")
+            continue
+        sets = _option_sets(solver)
+        if solver == "HIGHS":
+            unsupported = sorted(set(_HIGHS_SETS) - set(sets))
+            if unsupported and not opt:
+                notes.append(f"HIGHS: this highspy does not accept {unsupported}; skipped")
+        if opt:
+            if opt not in sets:
+                notes.append(f"{spec}: skipped: unknown option set; {solver} has {sorted(sets)}")
+                continue
+            sets = {opt: sets[opt]}
+        for set_name, options in sets.items():
+            cfg = SolverConfig(solver, set_name, options)
+            if cfg not in configs:
+                configs.append(cfg)
+    return configs, notes
+
+
+# ---------------------------------------------------------------------- instances
+@dataclass
+class Case:
+    """A loaded study instance: its MDP (or patrol parameters) and partition."""
+
+    spec: str
+    name: str
+    instance: Any  # lpbounds.instances.Instance or None
+    mdp: Any = None
+    partition: Any = None
+
+    @property
+    def kind(self) -> str:
+        return "garnet" if self.instance is None else self.instance.kind
+
+    def params(self) -> Any:
+        """The patrol parameters of a ``kind = "patrol"`` instance."""
+        from .patrol.params import PatrolParams
+
+        table = {k: v for k, v in self.instance.config["model"].items() if k != "kind"}
+        return PatrolParams.from_table(table)
+
+
+def parse_instance(spec: str) -> tuple[str, dict[str, int] | None]:
+    """``(name, garnet parameters or None)`` of an instance specification."""
+    if spec.startswith("garnet:"):
+        parts = spec.split(":")[1:]
+        if not 2 <= len(parts) <= 3 or not all(p.isdigit() for p in parts):
+            raise ValidationError(
+                f"random instance {spec!r} must be written garnet:N:M[:SEED] (integers)"
+            )
+        n, m = int(parts[0]), int(parts[1])
+        seed = int(parts[2]) if len(parts) == 3 else 0
+        if not 1 <= m <= n:
+            raise ValidationError(f"{spec!r}: need 1 <= M <= N")
+        return spec, {"n": n, "m": m, "seed": seed}
+    return spec, None
+
+
+@lru_cache(maxsize=8)
+def load_case(spec: str) -> Case:
+    """Load (and cache in this process) the instance ``spec``."""
+    from .generators import garnet, random_partition
+    from .instances import load_instance
+
+    name, g = parse_instance(spec)
+    if g is not None:
+        mdp = garnet(g["n"], 3, 4, 0.9, seed=g["seed"])
+        part = random_partition(g["n"], g["m"], seed=g["seed"] + 1)
+        return Case(spec, name, None, mdp, part)
+    inst = load_instance(spec)
+    case = Case(spec, inst.name, inst)
+    if inst.kind != "patrol":  # patrol bounds are built from the parameters alone
+        case.mdp = inst.mdp()
+        case.partition = inst.partition() if inst.has_partition else None
+    return case
+
+
+# ---------------------------------------------------------------------- formulations
+@dataclass(frozen=True)
+class FormulationSpec:
+    """How a study builds a formulation and its exact, solver-free counterpart.
+
+    ``build(case)`` returns a fresh :class:`~lpbounds.formulations.base.Formulation`;
+    ``reference(case, form)`` returns ``(exact values, their error bound)`` to compare
+    with ``LPResult.values`` (or with ``LPResult.x`` when the sizes match that instead).
+    """
+
+    name: str
+    module: str
+    build: Callable[[Case], Formulation]
+    reference: Callable[[Case, Any], tuple[np.ndarray, float]]
+    description: str
+
+
+def _rows_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
+    """Fixed point of the max over the formulation's rows (Fact 1), with its error bound."""
+    from .dp import solve_exact
+
+    res = solve_exact(form.rows)
+    return res.values, float(res.error_bound)
+
+
+def _fixed_point_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
+    """The formulation's own ``fixed_point()`` (error bound: that of an exact DP solve)."""
+    fp = form.fixed_point()
+    values = getattr(fp, "values", fp)
+    bound = float(getattr(fp, "error_bound", float("nan")))
+    return np.asarray(values, dtype=np.float64), bound
+
+
+def _need_mdp(case: Case, what: str) -> None:
+    if case.mdp is None or case.partition is None:
+        raise ValidationError(f"{what} needs an MDP with a partition; {case.name} has none")
+
+
+def _build_elp(case: Case) -> Any:
+    from .formulations.elp import ELP
+
+    if case.mdp is None:
+        raise ValidationError(f"ELP needs an enumerated MDP; {case.name} is not one")
+    return ELP(case.mdp)
+
+
+def _build_rlp(case: Case) -> Any:
+    from .formulations.rlp import RLP
+
+    _need_mdp(case, "RLP")
+    return RLP(case.mdp, case.partition)
+
+
+def _build_slp(case: Case) -> Any:
+    from .formulations.slp import SLP
+
+    _need_mdp(case, "SLP")
+    return SLP(case.mdp, case.partition, mu="uniform")
+
+
+def _build_ib(case: Case) -> Any:
+    from .formulations.ib import IB
+
+    _need_mdp(case, "IB")
+    return IB(case.mdp, case.partition, 2)
+
+
+def _build_alp(case: Case) -> Any:
+    from .formulations.alp import ALP
+
+    _need_mdp(case, "ALP")
+    return ALP(case.mdp, case.partition.basis)
+
+
+def _alp_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
+    """With the hard basis Phi, ALP is RLP: its optimum is RLP's least feasible point."""
+    from .dp import solve_exact
+    from .rows import BellmanRows
+
+    res = solve_exact(BellmanRows.aggregate(case.mdp, case.partition, reduce="max"))
+    return res.values, float(res.error_bound)
+
+
+def _build_patrol(kind: str) -> Callable[[Case], Any]:
+    def build(case: Case) -> Any:
+        from .patrol import bounds
+
+        if case.kind != "patrol":
+            raise ValidationError(f"{kind.upper()}LP applies to patrol instances only")
+        cls = bounds.UBLP if kind == "up" else bounds.LBLP
+        return cls(case.params())
+
+    return build
+
+
+#: Formulations a study knows, by the paper's name. A class not importable yet is
+#: skipped with a note (see :func:`available_formulations`).
+FORMULATIONS: dict[str, FormulationSpec] = {
+    "ELP": FormulationSpec(
+        "ELP", "lpbounds.formulations.elp", _build_elp, _rows_reference, "exact LP, eq. 8"
+    ),
+    "RLP": FormulationSpec(
+        "RLP", "lpbounds.formulations.rlp", _build_rlp, _rows_reference, "restricted LP, eq. 9"
+    ),
+    "SLP": FormulationSpec(
+        "SLP",
+        "lpbounds.formulations.slp",
+        _build_slp,
+        _fixed_point_reference,
+        "surrogate LP, eq. 12, uniform mu (hard aggregation)",
+    ),
+    "IB": FormulationSpec(
+        "IB",
+        "lpbounds.formulations.ib",
+        _build_ib,
+        _fixed_point_reference,
+        "iterated-Bellman lifted LP, eq. 20-22, L = 2",
+    ),
+    "ALP": FormulationSpec(
+        "ALP",
+        "lpbounds.formulations.alp",
+        _build_alp,
+        _alp_reference,
+        "basis LP with the hard basis Phi (equals RLP)",
+    ),
+    "UBLP": FormulationSpec(
+        "UBLP",
+        "lpbounds.patrol.bounds",
+        _build_patrol("up"),
+        _fixed_point_reference,
+        "patrol upper-bound LP, Theorem 4",
+    ),
+    "LBLP": FormulationSpec(
+        "LBLP",
+        "lpbounds.patrol.bounds",
+        _build_patrol("low"),
+        _fixed_point_reference,
+        "patrol lower-bound LP, Theorem 3",
+    ),
+}
+
+
+def available_formulations(
+    names: Iterable[str] | None = None,
+) -> tuple[list[str], list[str]]:
+    """The requested formulation names whose classes import, and notes for the rest."""
+    import importlib
+
+    requested = list(FORMULATIONS) if names is None else [str(n).upper() for n in names]
+    ok: list[str] = []
+    notes: list[str] = []
+    for name in requested:
+        spec = FORMULATIONS.get(name)
+        if spec is None:
+            raise ValidationError(f"unknown formulation {name!r}; known: {sorted(FORMULATIONS)}")
+        try:
+            importlib.import_module(spec.module)
+        except ImportError as exc:
+            notes.append(f"{name}: skipped: {spec.module} is not available ({exc})")
+            continue
+        if name not in ok:
+            ok.append(name)
+    return ok, notes
+
+
+# ---------------------------------------------------------------------- one task
+@lru_cache(maxsize=32)
+def _reference(spec: str, formulation: str) -> tuple[np.ndarray, float]:
+    case = load_case(spec)
+    fspec = FORMULATIONS[formulation]
+    return fspec.reference(case, fspec.build(case))
+
+
+def _compare(result: Any, exact: np.ndarray) -> float:
+    """``max |LP values - exact|`` (against ``x`` when that is what ``exact`` matches)."""
+    for vec in (result.values, result.x):
+        v = np.asarray(vec, dtype=np.float64).ravel()
+        if v.size == exact.size:
+            return float(np.abs(v - exact.ravel()).max(initial=0.0))
+    return float("nan")
+
+
+def run_task(task: tuple[str, str, SolverConfig, int]) -> list[dict[str, Any]]:
+    """Solve one (instance, formulation, solver configuration) ``repeat`` times.
+
+    Returns one record per repetition (keys :data:`COLUMNS`). Errors of the model or
+    the solver are recorded in ``status``/``note``, never raised, so one failure does
+    not stop a study.
+    """
+    spec, formulation, cfg, repeat = task
+    base: dict[str, Any] = dict.fromkeys(COLUMNS)
+    base.update(
+        instance=spec,
+        formulation=formulation,
+        solver=cfg.solver,
+        option_set=cfg.option_set,
+        config=cfg.label,
+        note="",
+    )
+    try:
+        case = load_case(spec)
+        base["instance"] = case.name
+        if case.mdp is not None:
+            base["n_states"] = case.mdp.n_states
+        if case.partition is not None:
+            base["n_partitions"] = case.partition.n_partitions
+        exact, ref_bound = _reference(spec, formulation)
+    except (LPBoundsError, ImportError) as exc:
+        return [{**base, "repeat": 0, "status": "skipped", "note": str(exc)}]
+    deviation_tol = LP_COMPARE_RTOL * max(1.0, float(np.abs(exact).max(initial=0.0)))
+    records = []
+    for k in range(repeat):
+        rec = {**base, "repeat": k, "reference_error_bound": ref_bound}
+        rec["deviation_tol"] = deviation_tol
+        t0 = time.perf_counter()
+        try:
+            form = FORMULATIONS[formulation].build(case)
+            rec["n_rows"], rec["n_vars"] = (int(s) for s in form.A.shape)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                res = form.solve(cfg.solver, raise_on_failure=False, **dict(cfg.options))
+        except LPBoundsError as exc:
+            rec.update(status="solver_error", note=str(exc))
+            rec["wall_seconds"] = time.perf_counter() - t0
+            records.append(rec)
+            continue
+        rec["wall_seconds"] = time.perf_counter() - t0
+        dev = _compare(res, exact) if res.status.value != "solver_error" else float("nan")
+        rec.update(
+            status=res.status.value,
+            objective=res.objective,
+            max_deviation=dev,
+            accurate=bool(dev <= deviation_tol) if math.isfinite(dev) else False,
+            primal_residual=res.primal_residual,
+            residual_tol=res.residual_tol,
+            dual_residual=res.dual_residual,
+            gap=res.gap,
+            compile_seconds=res.compile_seconds,
+            solve_seconds=res.solve_seconds,
+            iterations=res.iterations,
+            note="; ".join(
+                ([str(res.extra["message"])] if "message" in res.extra else [])
+                + sorted({f"{w.category.__name__}: {w.message}" for w in caught})
+            ),
+        )
+        records.append(rec)
+    return records
+
+
+# ---------------------------------------------------------------------- the study
+@dataclass
+class StudyResult:
+    """A study's table (one row per solve) and the notes on what was skipped."""
+
+    frame: pd.DataFrame
+    notes: list[str]
+    seconds: float
+
+    def summary(self) -> pd.DataFrame:
+        """Median over repetitions per (instance, formulation, solver configuration)."""
+        return summarize(self.frame)
+
+
+def run_study(
+    instances: Sequence[str] | None = None,
+    formulations: Sequence[str] | None = None,
+    solvers: Sequence[str] | None = None,
+    *,
+    repeat: int = 1,
+    jobs: int | None = None,
+    scheduler: str | Any | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> StudyResult:
+    """Solve every (instance, formulation, solver configuration) ``repeat`` times.
+
+    Parameters
+    ----------
+    instances : sequence of str, optional
+        Instance files or names (``models/``), or ``garnet:N:M[:SEED]``
+        (default :data:`DEFAULT_INSTANCES`).
+    formulations : sequence of str, optional
+        Paper names (default :data:`DEFAULT_FORMULATIONS`).
+    solvers : sequence of str, optional
+        ``SOLVER`` or ``SOLVER:SET`` (default: every installed LP solver, every set).
+    repeat : int
+        Solves per combination (each on a freshly built formulation).
+    jobs : int, optional
+        Local worker processes (default ``os.cpu_count()``); ``1`` runs in this process.
+    scheduler : str or dask.distributed.Client, optional
+        Address of a running Dask scheduler (``"tcp://127.0.0.1:8786"``), or a client;
+        the tasks then run on that cluster instead of local processes.
+    progress : callable(done, total), optional
+        Called after each finished task.
+
+    Returns
+    -------
+    StudyResult
+    """
+    import pandas as pd
+
+    if repeat < 1:
+        raise ValidationError(f"repeat must be >= 1; got {repeat}")
+    t0 = time.perf_counter()
+    instances = list(instances) if instances else list(DEFAULT_INSTANCES)
+    for spec in instances:
+        parse_instance(spec)
+    names, notes = available_formulations(formulations or DEFAULT_FORMULATIONS)
+    configs, solver_notes = solver_configs(solvers)
+    notes += solver_notes
+    tasks = [(s, f, c, repeat) for s in instances for f in names for c in configs]
+    records: list[dict[str, Any]] = []
+    done = 0
+    if scheduler is not None:
+        for batch in _run_dask(tasks, scheduler):
+            records += batch
+            done += 1
+            if progress:
+                progress(done, len(tasks))
+    elif (jobs or os.cpu_count() or 1) <= 1 or len(tasks) <= 1:
+        for task in tasks:
+            records += run_task(task)
+            done += 1
+            if progress:
+                progress(done, len(tasks))
+    else:
+        n = min(int(jobs or os.cpu_count() or 1), len(tasks))
+        # spawn, not fork: forking a process that has run OpenMP code (numba, HiGHS)
+        # aborts the child ("fork() called from a process already using GNU OpenMP")
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
+            for batch in pool.map(run_task, tasks):
+                records += batch
+                done += 1
+                if progress:
+                    progress(done, len(tasks))
+    frame = pd.DataFrame.from_records(records, columns=list(COLUMNS))
+    skipped = frame[frame["status"] == "skipped"]
+    for (inst, form), grp in skipped.groupby(["instance", "formulation"]):
+        notes.append(f"{form} on {inst}: skipped: {grp['note'].iloc[0]}")
+    frame = frame[frame["status"] != "skipped"].reset_index(drop=True)
+    return StudyResult(frame, notes, time.perf_counter() - t0)
+
+
+def _run_dask(tasks: list[Any], scheduler: str | Any) -> Iterable[list[dict[str, Any]]]:
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError as exc:
+        raise SolverNotInstalledError(
+            "--scheduler needs dask.distributed: pip install 'lpbounds[study]'"
+        ) from exc
+    own = not isinstance(scheduler, Client)
+    client = Client(scheduler) if own else scheduler
+    try:
+        futures = client.map(run_task, tasks, pure=False)
+        for fut in as_completed(futures):
+            yield fut.result()
+    finally:
+        if own:
+            client.close()
+
+
+def summarize(frame: pd.DataFrame) -> pd.DataFrame:
+    """Median times over repetitions per (instance, formulation, configuration)."""
+    keys = ["instance", "formulation", "config"]
+    agg = frame.groupby(keys, sort=False).agg(
+        n_vars=("n_vars", "first"),
+        status=("status", lambda s: ",".join(sorted(set(s)))),
+        objective=("objective", "median"),
+        max_deviation=("max_deviation", "max"),
+        accurate=("accurate", "all"),
+        primal_residual=("primal_residual", "max"),
+        compile_seconds=("compile_seconds", "median"),
+        solve_seconds=("solve_seconds", "median"),
+        iterations=("iterations", "median"),
+        repeats=("repeat", "count"),
+    )
+    return agg.reset_index()
+
+
+def plot_study(frame: pd.DataFrame, path: str | Path) -> Path:
+    """Save the summary figure: solve time vs LP size per solver; accuracy vs time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    ok = frame[frame["status"].isin(["optimal", "optimal_inaccurate", "residual_too_large"])]
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
+    markers = dict(zip(sorted(frame["formulation"].unique()), "osD^v<>ph*", strict=False))
+    configs = sorted(frame["config"].unique())
+    colors = {c: plt.cm.tab10(i % 10) for i, c in enumerate(configs)}
+    for (cfg, form), grp in ok.groupby(["config", "formulation"]):
+        med = grp.groupby("n_vars", as_index=False)["solve_seconds"].median()
+        ax1.plot(
+            med["n_vars"],
+            med["solve_seconds"],
+            marker=markers[form],
+            color=colors[cfg],
+        )
+        total = grp["compile_seconds"] + grp["solve_seconds"]
+        dev = np.maximum(grp["max_deviation"].astype(float), 1e-16)
+        ax2.scatter(total, dev, marker=markers[form], color=colors[cfg])
+    if len(ok):
+        tol = float(np.nanmedian(ok["deviation_tol"].astype(float)))
+        ax2.axhline(tol, color="grey", ls="--", lw=1)
+        ax2.annotate("LP_COMPARE_RTOL x scale", (ax2.get_xlim()[0], tol), fontsize=8, va="bottom")
+    ax1.set(
+        xscale="log",
+        yscale="log",
+        xlabel="LP variables",
+        ylabel="solve time (s, median)",
+        title="solve time vs size",
+    )
+    ax2.set(
+        xscale="log",
+        yscale="log",
+        xlabel="compile + solve time (s)",
+        ylabel="max |LP values - exact fixed point| (floored at 1e-16)",
+        title="accuracy vs time",
+    )
+    ax1.grid(True, which="both", alpha=0.3)
+    ax2.grid(True, which="both", alpha=0.3)
+    from matplotlib.lines import Line2D
+
+    color_keys = [Line2D([], [], color=colors[c], marker="o", ls="-", label=c) for c in configs]
+    marker_keys = [Line2D([], [], color="k", marker=m, ls="", label=f) for f, m in markers.items()]
+    fig.legend(
+        handles=color_keys + marker_keys,
+        loc="center right",
+        fontsize=8,
+        frameon=False,
+        title="solver (colour) / formulation (marker)",
+        title_fontsize=8,
+    )
+    fig.tight_layout(rect=(0, 0, 0.8, 1))
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def save_study(result: StudyResult, out: str | Path) -> dict[str, Path]:
+    """Write ``study.csv`` (and ``study.parquet`` if pyarrow is installed),
+    ``summary.csv``, ``notes.txt`` and ``study.png`` into ``out``; returns the paths."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"csv": out / "study.csv", "summary": out / "summary.csv", "notes": out / "notes.txt"}
+    result.frame.to_csv(paths["csv"], index=False)
+    result.summary().to_csv(paths["summary"], index=False)
+    paths["notes"].write_text("".join(f"{n}\n" for n in result.notes))
+    try:
+        import pyarrow  # noqa: F401
+
+        paths["parquet"] = out / "study.parquet"
+        result.frame.to_parquet(paths["parquet"], index=False)
+    except ImportError:
+        pass
+    paths["plot"] = plot_study(result.frame, out / "study.png")
+    return paths
