@@ -1,0 +1,617 @@
+r"""Balas' disjunctive cutting planes for the NLP (eq. 25): master LP, cut-generating LP, loop.
+
+The NLP's feasible set is ``F = {w : w(i) >= min_{t in (i,u)} q_t(w) for every (i, u)}``
+with ``q_t(w) = rho_t + lambda sum_l p_{t,l} w(k_{t,l})``; each (i, u) with ``T >= 2``
+terms is the disjunction ``OR_t  a_t'w >= b_t`` (``a_t = e_i - lambda P_t``, ``b_t = rho_t``).
+
+Master LP (a relaxation of ``F`` intersected with the box, valid for ``w*``)
+    ``min c'w  s.t.  G w >= h,  lo <= w <= hi`` where ``G w >= h`` holds the (i, u) with a
+    single term (ordinary rows) and the cuts added so far, and ``lo = min rho / (1 -
+    lambda)``, ``hi = max rho / (1 - lambda)`` (``w*`` is the value of a game with rewards
+    ``rho``, so it lies in the box).
+
+Cut-generating LP (lift-and-project, Balas 1979; Balas, Ceria & Cornuejols 1993)
+    For a disjunction violated by the master's point ``wbar``, with the master's
+    polyhedron written as ``Gf w >= hf`` (``G``, then the box as ``I w >= lo``,
+    ``-I w >= -hi``)::
+
+        min   wbar'alpha - beta
+        s.t.  alpha = Gf'u_t + v_t a_t            for every term t   (Farkas)
+              beta <= hf'u_t + v_t b_t            for every term t
+              sum_t (1'u_t + v_t) = 1             (the normalisation)
+              u_t >= 0, v_t >= 0;  alpha, beta free.
+
+    Every feasible ``(alpha, beta)`` gives ``alpha'w >= beta`` valid on each term's
+    polyhedron ``Q_t = {Gf w >= hf, a_t'w >= b_t}``, hence on their union; a negative
+    optimum is the deepest cut (under this normalisation) separating ``wbar``.
+
+Making the cuts valid (``/work/shared/notes/nlp-cutting-planes.md``)
+    With this normalisation the CGLP's ``alpha`` are tiny (1e-6..1e-8), so the solver's
+    absolute tolerances are large relative errors in ``beta``: cuts taken straight from
+    it were measured to cut off the optimum. Each cut is therefore
+
+    1. rescaled to ``max_j |alpha_j| = 1``;
+    2. given the right-hand side ``beta = min_t L_t`` where ``L_t`` is a *weak-duality*
+       lower bound on ``min {alpha'w : w in Q_t}``: solve that LP (one per term; the T
+       LPs are independent and are solved together as one block-diagonal LP) and, from
+       any multipliers ``y >= 0`` of its rows ``A_t w >= r_t`` (clipped to ``>= 0``),
+       ``L_t = r_t'y + sum_j min((alpha - A_t'y)_j lo_j, (alpha - A_t'y)_j hi_j)``.
+       That holds for *every* ``y >= 0`` (Lagrangian relaxation over the box), so it
+       does not depend on the solver's accuracy, and equals the minimum when ``y`` is
+       optimal. ``Q_t`` is never empty: ``w = hi 1`` satisfies every row (``hi(1 -
+       lambda) = max rho``) and therefore every valid cut.
+    3. lowered by ``NLP_CUT_SAFETY_RTOL * max(1, |beta|)`` for rounding.
+
+    Every master optimum is then a lower bound on ``c'w*``; it is reported through the
+    same weak-duality bound on the master (never the solver's objective value).
+
+The upper side of the bracket: at each master point ``wbar`` the minimiser's strategy
+``sigma(i,u) = argmin_t q_t(wbar)`` is evaluated exactly (the least element of its row
+system, Fact 1 in :mod:`lpbounds.rows`); that point is feasible for the NLP (after the
+``residual / (1 - lambda)`` shift that makes it so in floating point), so ``c'`` of it is
+an upper bound.
+
+Solvers: :class:`NLPMaster`, :class:`CutGeneratingLP` and :class:`TermLP` are cvxpy model
+classes (:class:`~lpbounds.formulations.base.Formulation`) built from the same sparse
+data as the loop's HiGHS models; ``backend="highspy"`` keeps one persistent HiGHS master
+(cuts are appended, the simplex warm-starts) and solves the CGLP and term LPs with
+``highspy`` directly, ``backend="cvxpy"`` solves every LP cold through cvxpy (any
+installed LP solver; much slower). The tests check one against the other.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import SolverError, ValidationError
+from ..tolerances import NLP_CUT_MIN_DEPTH_RTOL, NLP_CUT_SAFETY_RTOL, NLP_VIOLATION_RTOL
+from .base import Formulation, resolve_solver
+
+if TYPE_CHECKING:
+    from .nlp import NLP, NLPIteration
+
+__all__ = [
+    "CutGeneratingLP",
+    "GeneralLP",
+    "LPData",
+    "NLPMaster",
+    "TermLP",
+    "cutting_planes",
+    "highs_solve",
+    "weak_duality_bound",
+]
+
+INF = np.inf
+
+
+# ---------------------------------------------------------------------- LP data
+@dataclass
+class LPData:
+    """``min c'x  s.t.  row_lo <= A x <= row_hi,  col_lo <= x <= col_hi`` (inf allowed)."""
+
+    c: np.ndarray
+    A: sp.csr_matrix
+    row_lo: np.ndarray
+    row_hi: np.ndarray
+    col_lo: np.ndarray
+    col_hi: np.ndarray
+
+    def to_geq(self) -> tuple[sp.csr_matrix, np.ndarray]:
+        """The same polyhedron as ``A' x >= b'`` (finite sides only), for :class:`Formulation`."""
+        n = self.A.shape[1]
+        eye = sp.identity(n, format="csr")
+        parts_a, parts_b = [], []
+        for mat, lo, hi in ((self.A, self.row_lo, self.row_hi), (eye, self.col_lo, self.col_hi)):
+            fl, fh = np.isfinite(lo), np.isfinite(hi)
+            if fl.any():
+                parts_a.append(mat[np.flatnonzero(fl)])
+                parts_b.append(lo[fl])
+            if fh.any():
+                parts_a.append(-mat[np.flatnonzero(fh)])
+                parts_b.append(-hi[fh])
+        return sp.vstack(parts_a, format="csr"), np.concatenate(parts_b)
+
+
+def weak_duality_bound(data: LPData, row_dual: np.ndarray) -> float:
+    r"""A lower bound on ``min c'x`` over ``data`` (``>=`` rows and a finite box), from any duals.
+
+    For rows ``A x >= r`` (``row_hi = inf``) and ``lo <= x <= hi``, every ``y >= 0`` gives
+    ``min c'x >= r'y + sum_j min((c - A'y)_j lo_j, (c - A'y)_j hi_j)`` (Lagrangian
+    relaxation of the rows over the box), whatever the solver's accuracy; ``y`` is the
+    solver's row duals clipped to ``>= 0``. Equals the optimum at exact optimal duals.
+    """
+    if np.isfinite(data.row_hi).any() or not (
+        np.isfinite(data.col_lo).all() and np.isfinite(data.col_hi).all()
+    ):
+        raise ValidationError("weak_duality_bound needs >= rows and a finite box")
+    y = np.maximum(np.asarray(row_dual, dtype=np.float64), 0.0)
+    red = data.c - data.A.T @ y
+    return float(data.row_lo @ y + np.minimum(red * data.col_lo, red * data.col_hi).sum())
+
+
+# ---------------------------------------------------------------------- highspy
+@dataclass
+class HighsSolution:
+    """What the loop needs from a HiGHS solve."""
+
+    status: str
+    x: np.ndarray
+    row_dual: np.ndarray
+    objective: float
+    iterations: int
+
+
+def _highs() -> Any:
+    import highspy
+
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    return h
+
+
+def _highs_lp(data: LPData) -> Any:
+    import highspy
+
+    a = data.A.tocsr()
+    a.sort_indices()
+    lp = highspy.HighsLp()
+    lp.num_col_ = int(a.shape[1])
+    lp.num_row_ = int(a.shape[0])
+    lp.col_cost_ = np.asarray(data.c, dtype=np.float64)
+    lp.col_lower_ = np.asarray(data.col_lo, dtype=np.float64)
+    lp.col_upper_ = np.asarray(data.col_hi, dtype=np.float64)
+    lp.row_lower_ = np.asarray(data.row_lo, dtype=np.float64)
+    lp.row_upper_ = np.asarray(data.row_hi, dtype=np.float64)
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
+    lp.a_matrix_.num_col_ = lp.num_col_
+    lp.a_matrix_.num_row_ = lp.num_row_
+    lp.a_matrix_.start_ = a.indptr.astype(np.int32)
+    lp.a_matrix_.index_ = a.indices.astype(np.int32)
+    lp.a_matrix_.value_ = a.data.astype(np.float64)
+    return lp
+
+
+def _read(h: Any) -> HighsSolution:
+    import highspy
+
+    st = h.getModelStatus()
+    status = "optimal" if st == highspy.HighsModelStatus.kOptimal else h.modelStatusToString(st)
+    sol = h.getSolution()
+    info = h.getInfo()
+    return HighsSolution(
+        status=status,
+        x=np.array(sol.col_value, dtype=np.float64),
+        row_dual=np.array(sol.row_dual, dtype=np.float64),
+        objective=float(info.objective_function_value),
+        iterations=int(info.simplex_iteration_count),
+    )
+
+
+def highs_solve(data: LPData) -> HighsSolution:
+    """Solve ``data`` cold with highspy (dual simplex, HiGHS' default tolerances)."""
+    h = _highs()
+    h.passModel(_highs_lp(data))
+    h.run()
+    return _read(h)
+
+
+class _PersistentMaster:
+    """The master LP as one HiGHS model; cuts are appended and the simplex warm-starts."""
+
+    def __init__(self, data: LPData) -> None:
+        self.data = data
+        self.h = _highs()
+        self.h.passModel(_highs_lp(data))
+
+    def add_cuts(self, alpha: np.ndarray, beta: np.ndarray) -> None:
+        a = sp.csr_matrix(alpha)
+        a.sort_indices()
+        self.h.addRows(
+            a.shape[0],
+            np.asarray(beta, dtype=np.float64),
+            np.full(a.shape[0], INF),
+            int(a.nnz),
+            a.indptr[:-1].astype(np.int32),
+            a.indices.astype(np.int32),
+            a.data.astype(np.float64),
+        )
+        self.data = _append_rows(self.data, alpha, beta)
+
+    def solve(self) -> HighsSolution:
+        self.h.run()
+        return _read(self.h)
+
+
+def _append_rows(data: LPData, alpha: np.ndarray, beta: np.ndarray) -> LPData:
+    return LPData(
+        c=data.c,
+        A=sp.vstack([data.A, sp.csr_matrix(alpha)], format="csr"),
+        row_lo=np.concatenate([data.row_lo, beta]),
+        row_hi=np.concatenate([data.row_hi, np.full(len(beta), INF)]),
+        col_lo=data.col_lo,
+        col_hi=data.col_hi,
+    )
+
+
+# ---------------------------------------------------------------------- model data
+def master_data(
+    c: np.ndarray, G: sp.csr_matrix, h: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> LPData:
+    """``min c'w  s.t.  G w >= h,  lo <= w <= hi``."""
+    return LPData(
+        c=np.asarray(c, dtype=np.float64),
+        A=sp.csr_matrix(G),
+        row_lo=np.asarray(h, dtype=np.float64),
+        row_hi=np.full(G.shape[0], INF),
+        col_lo=np.asarray(lo, dtype=np.float64),
+        col_hi=np.asarray(hi, dtype=np.float64),
+    )
+
+
+def cglp_data(
+    wbar: np.ndarray,
+    G: sp.csr_matrix,
+    h: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    a_terms: sp.csr_matrix,
+    b_terms: np.ndarray,
+) -> LPData:
+    """The lift-and-project CGLP (module docstring) in variables ``[alpha, beta, (u_t, v_t)_t]``.
+
+    The master polyhedron is ``Gf w >= hf`` with ``Gf = [G; I; -I]``, ``hf = [h; lo; -hi]``.
+    """
+    m_vars = G.shape[1]
+    n_terms = a_terms.shape[0]
+    eye = sp.identity(m_vars, format="csr")
+    gf = sp.vstack([sp.csr_matrix(G), eye, -eye], format="csr")
+    hf = np.concatenate([h, lo, -hi])
+    n_mult = gf.shape[0] + 1  # u_t then v_t
+    # equality rows alpha - Gf'u_t - v_t a_t = 0, one block of m_vars rows per term
+    blocks = [sp.hstack([-gf.T, -a_terms[t].T], format="csr") for t in range(n_terms)]
+    eq = sp.hstack(
+        [
+            sp.vstack([eye] * n_terms, format="csr"),
+            sp.csr_matrix((n_terms * m_vars, 1)),
+            sp.block_diag(blocks, format="csr"),
+        ],
+        format="csr",
+    )
+    # hf'u_t + v_t b_t - beta >= 0
+    rhs_rows = [sp.csr_matrix(np.r_[hf, b_terms[t]][None, :]) for t in range(n_terms)]
+    ge = sp.hstack(
+        [
+            sp.csr_matrix((n_terms, m_vars)),
+            sp.csr_matrix(-np.ones((n_terms, 1))),
+            sp.block_diag(rhs_rows, format="csr"),
+        ],
+        format="csr",
+    )
+    norm = sp.csr_matrix(np.r_[np.zeros(m_vars + 1), np.ones(n_terms * n_mult)][None, :])
+    a = sp.vstack([eq, ge, norm], format="csr")
+    n_eq, n_ge = eq.shape[0], ge.shape[0]
+    n_cols = m_vars + 1 + n_terms * n_mult
+    c = np.zeros(n_cols)
+    c[:m_vars] = wbar
+    c[m_vars] = -1.0
+    col_lo = np.r_[np.full(m_vars + 1, -INF), np.zeros(n_terms * n_mult)]
+    return LPData(
+        c=c,
+        A=a,
+        row_lo=np.r_[np.zeros(n_eq), np.zeros(n_ge), 1.0],
+        row_hi=np.r_[np.zeros(n_eq), np.full(n_ge, INF), 1.0],
+        col_lo=col_lo,
+        col_hi=np.full(n_cols, INF),
+    )
+
+
+def term_lps_data(
+    alpha: np.ndarray,
+    G: sp.csr_matrix,
+    h: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    a_terms: sp.csr_matrix,
+    b_terms: np.ndarray,
+) -> list[LPData]:
+    """One LP per term: ``min alpha'w  s.t.  G w >= h,  a_t'w >= b_t,  lo <= w <= hi``."""
+    out = []
+    for t in range(a_terms.shape[0]):
+        out.append(
+            master_data(
+                alpha,
+                sp.vstack([G, a_terms[t]], format="csr"),
+                np.r_[h, b_terms[t]],
+                lo,
+                hi,
+            )
+        )
+    return out
+
+
+def _block_diag_data(parts: list[LPData]) -> LPData:
+    return LPData(
+        c=np.concatenate([p.c for p in parts]),
+        A=sp.block_diag([p.A for p in parts], format="csr"),
+        row_lo=np.concatenate([p.row_lo for p in parts]),
+        row_hi=np.concatenate([p.row_hi for p in parts]),
+        col_lo=np.concatenate([p.col_lo for p in parts]),
+        col_hi=np.concatenate([p.col_hi for p in parts]),
+    )
+
+
+# ---------------------------------------------------------------------- cvxpy models
+class GeneralLP(Formulation):
+    """A cvxpy model class of :class:`LPData` (converted to ``A x >= b``)."""
+
+    name = "LP"
+
+    def __init__(self, data: LPData, name: str | None = None) -> None:
+        self.data = data
+        a, b = data.to_geq()
+        super().__init__(a, b, data.c, name)
+
+
+class NLPMaster(GeneralLP):
+    r"""The cutting-plane master: ``min c'w  s.t.  G w >= h,  lo <= w <= hi`` (a relaxation of eq. 25).
+
+    ``G w >= h``: the NLP's single-term (i, u) as ordinary rows and the cuts so far. Its
+    optimum is a lower bound on ``c'w*`` as long as every cut is valid.
+    """
+
+    name = "NLP-master"
+
+    @classmethod
+    def build(
+        cls, c: np.ndarray, G: sp.csr_matrix, h: np.ndarray, lo: np.ndarray, hi: np.ndarray
+    ) -> NLPMaster:
+        return cls(master_data(c, G, h, lo, hi))
+
+
+class CutGeneratingLP(GeneralLP):
+    """The lift-and-project CGLP of one disjunction (see :func:`cglp_data`)."""
+
+    name = "NLP-CGLP"
+
+    @classmethod
+    def build(cls, *args: Any) -> CutGeneratingLP:
+        return cls(cglp_data(*args))
+
+
+class TermLP(GeneralLP):
+    """``min alpha'w`` over one term's polyhedron (the exact right-hand side of a cut)."""
+
+    name = "NLP-term"
+
+
+# ---------------------------------------------------------------------- backends
+class _Backend:
+    """Solves the loop's LPs; returns primal points and row duals of the ``LPData`` rows."""
+
+    def __init__(self, kind: str, solver: str, options: dict[str, Any]) -> None:
+        if kind not in ("highspy", "cvxpy"):
+            raise ValidationError(f"backend must be 'highspy' or 'cvxpy'; got {kind!r}")
+        self.kind = kind
+        self.solver = resolve_solver(solver)
+        if kind == "highspy" and self.solver != "HIGHS":
+            raise ValidationError(
+                f"backend='highspy' solves with HiGHS; for solver={solver!r} use backend='cvxpy'"
+            )
+        self.options = options
+        self.master: _PersistentMaster | None = None
+        self.master_data: LPData | None = None
+
+    def _cvxpy(self, data: LPData, cls: type[GeneralLP] = GeneralLP) -> HighsSolution:
+        model = cls(data)
+        res = model.solve(self.solver, raise_on_failure=False, **self.options)
+        if not res.ok:
+            return HighsSolution(str(res.status), res.x, np.zeros(data.A.shape[0]), np.nan, 0)
+        # map the >= duals of to_geq back to data's rows (finite lower sides first)
+        y = res.duals
+        fl, fh = np.isfinite(data.row_lo), np.isfinite(data.row_hi)
+        row_dual = np.zeros(data.A.shape[0])
+        k = int(fl.sum())
+        row_dual[fl] += y[:k]
+        row_dual[fh] -= y[k : k + int(fh.sum())]
+        return HighsSolution("optimal", res.x, row_dual, res.objective, res.iterations or 0)
+
+    def start_master(self, data: LPData) -> None:
+        self.master_data = data
+        if self.kind == "highspy":
+            self.master = _PersistentMaster(data)
+
+    def add_cuts(self, alpha: np.ndarray, beta: np.ndarray) -> None:
+        assert self.master_data is not None
+        if self.master is not None:
+            self.master.add_cuts(alpha, beta)
+            self.master_data = self.master.data
+        else:
+            self.master_data = _append_rows(self.master_data, alpha, beta)
+
+    def solve_master(self) -> HighsSolution:
+        assert self.master_data is not None
+        if self.master is not None:
+            return self.master.solve()
+        return self._cvxpy(self.master_data, NLPMaster)
+
+    def solve(self, data: LPData, cls: type[GeneralLP] = GeneralLP) -> HighsSolution:
+        if self.kind == "highspy":
+            return highs_solve(data)
+        return self._cvxpy(data, cls)
+
+    def term_bounds(self, parts: list[LPData]) -> np.ndarray:
+        """Weak-duality lower bounds of each term LP (``nan`` where a solve failed)."""
+        out = np.full(len(parts), np.nan)
+        if self.kind == "highspy":
+            joint = _block_diag_data(parts)
+            sol = highs_solve(joint)
+            if sol.status != "optimal":
+                return out
+            start = 0
+            for t, p in enumerate(parts):
+                n_rows = p.A.shape[0]
+                out[t] = weak_duality_bound(p, sol.row_dual[start : start + n_rows])
+                start += n_rows
+            return out
+        for t, p in enumerate(parts):
+            sol = self._cvxpy(p, TermLP)
+            if sol.status == "optimal":
+                out[t] = weak_duality_bound(p, sol.row_dual)
+        return out
+
+
+# ---------------------------------------------------------------------- the loop
+@dataclass
+class CutLoopOutput:
+    """What :func:`cutting_planes` hands back to :meth:`NLP.solve`."""
+
+    lower: float
+    upper: float
+    best_point: np.ndarray
+    master_point: np.ndarray
+    rounds: int
+    cuts: int
+    converged: bool
+    stop_reason: str
+    log: list[NLPIteration]
+    cut_alpha: np.ndarray
+    cut_beta: np.ndarray
+    master_objective: float
+
+
+def cutting_planes(
+    nlp: NLP,
+    *,
+    solver: str = "HIGHS",
+    backend: str = "highspy",
+    gap_rtol: float,
+    max_rounds: int = 200,
+    cuts_per_round: int = 10,
+    time_limit: float | None = None,
+    on_round: Callable[[NLPIteration], None] | None = None,
+    **options: Any,
+) -> CutLoopOutput:
+    """Run the disjunctive cutting-plane loop on ``nlp`` (see the module docstring)."""
+    from .nlp import NLPIteration
+
+    if max_rounds < 1:
+        raise ValidationError(f"max_rounds must be >= 1; got {max_rounds}")
+    if cuts_per_round < 1:
+        raise ValidationError(f"cuts_per_round must be >= 1; got {cuts_per_round}")
+    t0 = time.perf_counter()
+    be = _Backend(backend, solver, options)
+    rows = nlp.rows
+    m = rows.n_vars
+    c = nlp.cost
+    lo = np.full(m, nlp.box[0])
+    hi = np.full(m, nlp.box[1])
+    a_all, b_all = nlp.term_matrix
+    single = nlp.single_rows
+    be.start_master(master_data(c, a_all[single], b_all[single], lo, hi))
+    scale = nlp.scale
+    viol_tol = NLP_VIOLATION_RTOL * scale
+    depth_tol = NLP_CUT_MIN_DEPTH_RTOL * scale
+    starts, sizes = nlp.disj_start, nlp.disj_size
+    multi = np.flatnonzero(sizes >= 2)
+
+    lower, upper = -np.inf, np.inf
+    best = np.full(m, nlp.box[1])
+    upper = float(c @ best)
+    log: list[NLPIteration] = []
+    all_alpha: list[np.ndarray] = []
+    all_beta: list[float] = []
+    converged = False
+    stop = "max_rounds"
+    wbar = best
+    master_obj = np.nan
+    n_cuts = 0
+    for rnd in range(1, max_rounds + 1):
+        sol = be.solve_master()
+        if sol.status != "optimal":
+            raise SolverError(f"NLP cutting planes: master LP status {sol.status} in round {rnd}")
+        assert be.master_data is not None
+        wbar = np.clip(sol.x, lo, hi)
+        master_obj = sol.objective
+        lower = max(lower, weak_duality_bound(be.master_data, sol.row_dual))
+        # upper side: the minimiser's strategy at wbar, evaluated exactly
+        v, ub = nlp.strategy_upper_bound(nlp.best_terms(wbar))
+        if ub < upper:
+            upper, best = ub, v
+        gap = upper - lower
+        # separation
+        q = rows.q_values(wbar)
+        viol = np.minimum.reduceat(q, starts[:-1]) - wbar[nlp.disj_owner]
+        cand = multi[viol[multi] > viol_tol]
+        cand = cand[np.argsort(-viol[cand], kind="stable")][:cuts_per_round]
+        done = gap <= gap_rtol * max(1.0, abs(upper))
+        new_a: list[np.ndarray] = []
+        new_b: list[float] = []
+        if not done:
+            G, h = be.master_data.A, be.master_data.row_lo
+            for d in cand:
+                sl = slice(starts[d], starts[d + 1])
+                at, bt = a_all[sl], b_all[sl]
+                cg = be.solve(cglp_data(wbar, G, h, lo, hi, at, bt), CutGeneratingLP)
+                if cg.status != "optimal" or not cg.objective < 0:
+                    continue
+                alpha = cg.x[:m].copy()
+                s = float(np.abs(alpha).max())
+                if not s > 0:
+                    continue
+                alpha /= s
+                bounds = be.term_bounds(term_lps_data(alpha, G, h, lo, hi, at, bt))
+                if np.isnan(bounds).any():
+                    continue  # a term LP failed: no certified right-hand side, no cut
+                beta = float(bounds.min())
+                beta -= NLP_CUT_SAFETY_RTOL * max(1.0, abs(beta))
+                if beta - float(alpha @ wbar) > depth_tol:
+                    new_a.append(alpha)
+                    new_b.append(beta)
+        entry = NLPIteration(
+            iteration=rnd,
+            lower=lower,
+            upper=upper,
+            gap=gap,
+            cuts_added=len(new_a),
+            seconds=time.perf_counter() - t0,
+            max_violation=float(max(viol[multi].max(initial=0.0), 0.0)),
+            master_objective=master_obj,
+        )
+        log.append(entry)
+        if on_round is not None:
+            on_round(entry)
+        if done:
+            converged, stop = True, "gap closed"
+            break
+        if not new_a:
+            stop = "no violated disjunction" if cand.size == 0 else "no cut found (stalled)"
+            break
+        if time_limit is not None and time.perf_counter() - t0 > time_limit:
+            stop = "time_limit"
+            break
+        alpha_mat = np.vstack(new_a)
+        beta_vec = np.asarray(new_b)
+        be.add_cuts(alpha_mat, beta_vec)
+        all_alpha.append(alpha_mat)
+        all_beta.extend(new_b)
+        n_cuts += len(new_a)
+    return CutLoopOutput(
+        lower=lower,
+        upper=upper,
+        best_point=best,
+        master_point=wbar,
+        rounds=len(log),
+        cuts=n_cuts,
+        converged=converged,
+        stop_reason=stop,
+        log=log,
+        cut_alpha=np.vstack(all_alpha) if all_alpha else np.zeros((0, m)),
+        cut_beta=np.asarray(all_beta),
+        master_objective=master_obj,
+    )
