@@ -192,7 +192,7 @@ def solve_exact(
     *,
     tol: float | None = None,
     max_iter: int = 100_000,
-    eval_sweeps: int = 20,
+    eval_sweeps: int = 5,
     extrapolate: bool = True,
     initial: Any = None,
     evaluation: Literal["auto", "direct", "iterative"] = "auto",

@@ -1,0 +1,88 @@
+"""Shared by the benchmark scripts: machine description, timing in a fresh process, and
+writing one marked section of docs/benchmarks.md."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md"
+HEADER = """# Benchmarks
+
+Each section below is written by one script in `benchmarks/` (run it to refresh the
+section; the others are left as they are). Times are medians over repetitions unless a
+section says otherwise; peak memory is the peak resident set size of a fresh process
+that does only the measured work. Timings are never asserted in tests.
+"""
+
+
+def machine() -> str:
+    """One line describing this machine, Python and the key libraries."""
+    cpu = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    mem = ""
+    try:
+        kb = int(Path("/proc/meminfo").read_text().split()[1])
+        mem = f", {kb / 2**20:.0f} GiB RAM"
+    except (OSError, ValueError, IndexError):
+        pass
+    import numba
+    import numpy
+
+    return (
+        f"{cpu}, {os.cpu_count()} cores{mem}; {platform.system()} {platform.release()}; "
+        f"Python {platform.python_version()}, numpy {numpy.__version__}, numba {numba.__version__}"
+    )
+
+
+def today() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+
+
+def run_isolated(code: str, timeout: float = 1800) -> dict:
+    """Run ``code`` in a fresh interpreter; it must print one JSON object as its last line.
+
+    Adds ``peak_rss_mb`` (the child's peak resident set size).
+    """
+    wrapper = (
+        code
+        + "\nimport resource as _r, json as _j\n"
+        + "print('__PEAK__', _r.getrusage(_r.RUSAGE_SELF).ru_maxrss / 1024)\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", wrapper], capture_output=True, text=True, timeout=timeout
+    )
+    if proc.returncode != 0:
+        raise RuntimeError(f"benchmark child failed:\n{proc.stderr[-3000:]}")
+    lines = [ln for ln in proc.stdout.splitlines() if ln.strip()]
+    peak = float(lines[-1].split()[1])
+    out = json.loads(lines[-2])
+    out["peak_rss_mb"] = peak
+    return out
+
+
+def write_section(name: str, body: str) -> None:
+    """Replace (or append) the section between ``<!-- name:start -->`` and ``<!-- name:end -->``."""
+    start, end = f"<!-- {name}:start -->", f"<!-- {name}:end -->"
+    text = DOCS.read_text() if DOCS.exists() else HEADER
+    block = f"{start}\n{body.rstrip()}\n{end}"
+    pattern = re.compile(re.escape(start) + r".*?" + re.escape(end), re.S)
+    text = (
+        pattern.sub(lambda _: block, text)
+        if pattern.search(text)
+        else text.rstrip() + "\n\n" + block + "\n"
+    )
+    DOCS.parent.mkdir(parents=True, exist_ok=True)
+    DOCS.write_text(text)
