@@ -220,19 +220,40 @@ def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfi
 
 
 # ---------------------------------------------------------------------- instances
-@dataclass
 class Case:
-    """A loaded study instance: its MDP (or patrol parameters) and partition."""
+    """A study instance: its MDP and partition, built on first use (patrol instances
+    far too large to enumerate are used through their parameters alone)."""
 
-    spec: str
-    name: str
-    instance: Any  # lpbounds.instances.Instance or None
-    mdp: Any = None
-    partition: Any = None
+    def __init__(self, spec: str, name: str, instance: Any, mdp: Any = None, partition: Any = None):
+        self.spec = spec
+        self.name = name
+        self.instance = instance
+        self._mdp = mdp
+        self._partition = partition
 
     @property
     def kind(self) -> str:
         return "garnet" if self.instance is None else self.instance.kind
+
+    @property
+    def mdp(self) -> Any:
+        if self._mdp is None:
+            self._mdp = self.instance.mdp()
+        return self._mdp
+
+    @property
+    def partition(self) -> Any:
+        if self._partition is None and self.instance is not None and self.instance.has_partition:
+            self._partition = self.instance.partition()
+        return self._partition
+
+    def sizes(self) -> tuple[int, int | None]:
+        """``(n_states, n_partitions)`` without enumerating a patrol model."""
+        if self.kind == "patrol":
+            p = self.params()
+            return int(p.n_states), int(p.n_partitions)
+        part = self.partition
+        return self.mdp.n_states, (None if part is None else part.n_partitions)
 
     def params(self) -> Any:
         """The patrol parameters of a ``kind = "patrol"`` instance."""
@@ -270,11 +291,7 @@ def load_case(spec: str) -> Case:
         part = random_partition(g["n"], g["m"], seed=g["seed"] + 1)
         return Case(spec, name, None, mdp, part)
     inst = load_instance(spec)
-    case = Case(spec, inst.name, inst)
-    if inst.kind != "patrol":  # patrol bounds are built from the parameters alone
-        case.mdp = inst.mdp()
-        case.partition = inst.partition() if inst.has_partition else None
-    return case
+    return Case(spec, inst.name, inst)
 
 
 # ---------------------------------------------------------------------- formulations
@@ -311,15 +328,13 @@ def _fixed_point_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
 
 
 def _need_mdp(case: Case, what: str) -> None:
-    if case.mdp is None or case.partition is None:
-        raise ValidationError(f"{what} needs an MDP with a partition; {case.name} has none")
+    if case.partition is None:
+        raise ValidationError(f"{what} needs a partition; {case.name} has none")
 
 
 def _build_elp(case: Case) -> Any:
     from .formulations.elp import ELP
 
-    if case.mdp is None:
-        raise ValidationError(f"ELP needs an enumerated MDP; {case.name} is not one")
     return ELP(case.mdp)
 
 
@@ -361,11 +376,13 @@ def _alp_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
 
 
 def _build_patrol(kind: str) -> Callable[[Case], Any]:
+    name = "UBLP" if kind == "up" else "LBLP"
+
     def build(case: Case) -> Any:
         from .patrol import bounds
 
         if case.kind != "patrol":
-            raise ValidationError(f"{kind.upper()}LP applies to patrol instances only")
+            raise ValidationError(f"{name} applies to patrol instances only")
         cls = bounds.UBLP if kind == "up" else bounds.LBLP
         return cls(case.params())
 
@@ -479,10 +496,7 @@ def run_task(task: tuple[str, str, SolverConfig, int]) -> list[dict[str, Any]]:
     try:
         case = load_case(spec)
         base["instance"] = case.name
-        if case.mdp is not None:
-            base["n_states"] = case.mdp.n_states
-        if case.partition is not None:
-            base["n_partitions"] = case.partition.n_partitions
+        base["n_states"], base["n_partitions"] = case.sizes()
         exact, ref_bound = _reference(spec, formulation)
     except (LPBoundsError, ImportError) as exc:
         return [{**base, "repeat": 0, "status": "skipped", "note": str(exc)}]

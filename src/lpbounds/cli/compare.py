@@ -122,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
         "LP_COMPARE_RTOL * max(1, max|exact|)"
     )
     for note in result.notes:
-        err_console.print(f"note: {note}")
+        err_console.print(Text(f"note: {note}"))
     paths = save_study(result, args.out)
     out.print("wrote " + ", ".join(str(p) for p in paths.values()))
     return 0
