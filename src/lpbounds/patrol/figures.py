@@ -1,0 +1,312 @@
+r"""Figures 2-7 of the paper (Sections 4-6) as PNG files (matplotlib, Agg backend).
+
+Numbering follows the paper's LaTeX source (Figure 1 is the scenario sketch):
+
+* Figure 2 (``fig:info``): information gain ``I(d)`` against the dwell ``d``;
+* Figure 3 (``fig:MonoVal``): ``V*`` along partially ordered states: every station has an
+  alert (``A_j = 1``), ``d = 0``, ``w = +1``, the UAV at a station, ``taubar = 2..Gamma``;
+  dotted lines separate the partitions;
+* Figure 4 (``fig:MonoValPart``): ``V*`` of every state and ``min V*`` (green) of the
+  partitions ``A = 1 0 ... 0 1`` (first and last station alerted), ``d = 0``, ``w = +1``,
+  ``l`` = the first station, ``taubar = 2..Gamma``;
+* Figure 5 (``fig:BNDs_OPT``): ``V_up = Phi v*``, ``V_low = Phi w*`` and ``V*`` on the
+  ``2N`` partitions of eq. (32)-(33) (``d = 0``, ``taubar = 2``, all ``A_j = 1``;
+  clockwise ``l = 0..N-1``, then counter-clockwise);
+* Figure 6 (``fig:BNDs_SUBOPT``): ``V_sub`` against ``V*`` on the clockwise states of (32);
+* Figure 7 (``fig:perfcomp``): histograms of the service delay and of the loiters per
+  serviced alert under ``pi*`` and ``pi_s``.
+
+The ``select_*`` functions return the plotted data (so tests can check it against an
+independent selection); the ``plot_*`` functions write one PNG each.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+__all__ = [
+    "plot_bounds",
+    "plot_histograms",
+    "plot_information",
+    "plot_min_value_partitions",
+    "plot_ordered_states",
+    "plot_vsub",
+    "select_bounds_partitions",
+    "select_min_value_partitions",
+    "select_ordered_states",
+]
+
+_DPI = 130
+
+
+def _save(fig: Any, path: str | Path) -> Path:
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(p, dpi=_DPI)
+    plt.close(fig)
+    return p
+
+
+# ---------------------------------------------------------------------- Figure 2
+def plot_information(params: Any, path: str | Path) -> Path:
+    """Figure 2: ``I(d)`` (nats) for ``0 <= d <= D + 1``, with the integer dwells marked."""
+    d = np.linspace(0.0, params.D + 1, 200)
+    di = np.arange(params.D + 1)
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    ax.plot(d, params.information(d), color="tab:blue", label=r"$\mathcal{I}(d)$")
+    ax.plot(di, params.information(di), "o", color="tab:blue", label=f"d = 0..D (D = {params.D})")
+    ax.set_xlabel("dwell time d (loiters)")
+    ax.set_ylabel("information gain I(d) [nats]")
+    ax.set_title("Figure 2: value of information gained vs dwell time")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+# ---------------------------------------------------------------------- Figure 3
+def select_ordered_states(comps: np.ndarray, stations: Any) -> dict[int, np.ndarray]:
+    """States of Figure 3 per station node ``l``, ordered left to right.
+
+    All ``tau_j >= 1``, ``d = 0``, ``w = +1``, ``l = station``, ``taubar >= 2``; ordered by
+    ``taubar`` (the partition), then by the sum of the delays, then lexicographically,
+    so a state never comes after one that dominates it.
+    """
+    tau = comps[:, 3:].astype(np.int64)
+    taubar = tau.max(axis=1)
+    base = (comps[:, 2] == 0) & (comps[:, 1] == 1) & (tau >= 1).all(axis=1) & (taubar >= 2)
+    out: dict[int, np.ndarray] = {}
+    for s in stations:
+        idx = np.flatnonzero(base & (comps[:, 0] == s))
+        keys = [tau[idx, j] for j in range(tau.shape[1] - 1, -1, -1)]
+        order = np.lexsort((*keys, tau[idx].sum(axis=1), taubar[idx]))
+        out[int(s)] = idx[order]
+    return out
+
+
+def plot_ordered_states(
+    comps: np.ndarray, stations: Any, vstar: np.ndarray, path: str | Path
+) -> Path:
+    """Figure 3: ``V*`` along the ordered states of :func:`select_ordered_states`."""
+    sel = select_ordered_states(comps, stations)
+    n = len(sel)
+    ncol = 2 if n > 1 else 1
+    nrow = (n + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 3.2 * nrow), squeeze=False)
+    for ax, (s, idx) in zip(axes.ravel(), sel.items(), strict=False):
+        taubar = comps[idx, 3:].max(axis=1)
+        x = np.arange(idx.size)
+        ax.plot(x, vstar[idx], lw=0.4, color="tab:blue", rasterized=True)
+        for b in np.flatnonzero(np.diff(taubar)) + 0.5:
+            ax.axvline(b, color="grey", ls=":", lw=0.6)
+        ax.set_title(f"l = {s}: all stations alerted, d = 0, w = +1")
+        ax.set_xlabel(r"states ordered by max delay $\bar\tau$ = 2..Γ (dotted: partitions)")
+        ax.set_ylabel("V*")
+        ax.set_xlim(0, max(1, idx.size - 1))
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    fig.suptitle("Figure 3: V* decreases along partially ordered states")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+# ---------------------------------------------------------------------- Figure 4
+def select_min_value_partitions(
+    comps: np.ndarray, stations: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """States of Figure 4: ``l`` = first station, ``d = 0``, ``w = +1``, alerts exactly at
+    the first and last station (``A = 1 0 .. 0 1``), ``taubar >= 2``.
+
+    Returns ``(states, taubar, A)`` with the states ordered by ``taubar``, then by the
+    sum of the delays.
+    """
+    tau = comps[:, 3:].astype(np.int64)
+    m = tau.shape[1]
+    a = np.zeros(m, dtype=bool)
+    a[0] = a[-1] = True
+    alerted = tau > 0
+    mask = (
+        (comps[:, 0] == stations[0])
+        & (comps[:, 1] == 1)
+        & (comps[:, 2] == 0)
+        & (alerted == a[None, :]).all(axis=1)
+        & (tau.max(axis=1) >= 2)
+    )
+    idx = np.flatnonzero(mask)
+    taubar = tau[idx].max(axis=1)
+    order = np.lexsort((tau[idx, 0], tau[idx].sum(axis=1), taubar))
+    return idx[order], taubar[order], a.astype(int)
+
+
+def plot_min_value_partitions(
+    comps: np.ndarray, stations: Any, vstar: np.ndarray, path: str | Path
+) -> Path:
+    """Figure 4: ``V*`` of every state (dots) and ``min V*`` per partition (green)."""
+    idx, taubar, a = select_min_value_partitions(comps, stations)
+    fig, ax = plt.subplots(figsize=(8.0, 4.2))
+    x = np.arange(idx.size)
+    ax.plot(x, vstar[idx], ".", ms=3, color="tab:blue", label="V*(x), x in the partition")
+    if idx.size:
+        levels, start = np.unique(taubar, return_index=True)
+        ends = np.r_[start[1:], idx.size]
+        for k, (s0, e0) in enumerate(zip(start, ends, strict=True)):
+            vmin = vstar[idx[s0:e0]].min()
+            ax.hlines(
+                vmin,
+                s0 - 0.4,
+                e0 - 0.6,
+                color="green",
+                lw=2,
+                label="min V* over the partition" if k == 0 else None,
+            )
+            if k:
+                ax.axvline(s0 - 0.5, color="grey", ls=":", lw=0.7)
+            ax.text(
+                (s0 + e0 - 1) / 2,
+                ax.get_ylim()[1],
+                str(levels[k]),
+                ha="center",
+                va="bottom",
+                fontsize=7,
+            )
+    code = "".join(str(v) for v in a)
+    ax.set_xlabel(r"states grouped by partition, max delay $\bar\tau$ = 2..Γ (labels on top)")
+    ax.set_ylabel("V*")
+    ax.set_title(f"Figure 4: A = {code}, d = 0, w = +1, l = {stations[0]}", pad=14)
+    ax.legend(loc="lower left", fontsize=8)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+# ---------------------------------------------------------------------- Figure 5
+def select_bounds_partitions(pcomps: np.ndarray, N: int) -> np.ndarray:
+    """The ``2N`` partitions of eq. (32)-(33): ``d = 0``, ``taubar = 2``, all ``A_j = 1``;
+    first ``w = +1`` for ``l = 0..N-1``, then ``w = -1``. Returns partition indices."""
+    d, taubar = pcomps[:, 2], pcomps[:, -1]
+    a = pcomps[:, 3:-1]
+    base = (d == 0) & (taubar == 2) & (a == 1).all(axis=1)
+    out = []
+    for w in (1, -1):
+        for l in range(N):
+            hit = np.flatnonzero(base & (pcomps[:, 1] == w) & (pcomps[:, 0] == l))
+            out.append(int(hit[0]) if hit.size == 1 else -1)
+    return np.array(out, dtype=np.int64)
+
+
+def plot_bounds(
+    pcomps: np.ndarray,
+    labels: np.ndarray,
+    vstar: np.ndarray,
+    upper: np.ndarray,
+    lower: np.ndarray,
+    N: int,
+    path: str | Path,
+) -> Path:
+    """Figure 5: ``V_up``, ``V_low`` and ``V*`` (every member state) on the 2N partitions."""
+    parts = select_bounds_partitions(pcomps, N)
+    fig, ax = plt.subplots(figsize=(9.0, 4.4))
+    pos = np.full(pcomps.shape[0], -1)
+    pos[parts] = np.arange(parts.size)
+    member = pos[labels]
+    xs = np.flatnonzero(member >= 0)
+    ax.plot(member[xs] + 1, vstar[xs], ".", ms=3, color="tab:blue", alpha=0.6, label="V*(x)")
+    k = np.arange(1, parts.size + 1)
+    ax.plot(k, upper[parts], "v-", color="tab:red", ms=4, lw=1, label="V_up = Φ v* (UBLP)")
+    ax.plot(k, lower[parts], "^-", color="tab:green", ms=4, lw=1, label="V_low = Φ w* (LBLP)")
+    ax.axvline(N + 0.5, color="grey", ls=":", lw=0.8)
+    ax.set_xticks(k[:: max(1, N // 8)])
+    ax.set_xlabel(
+        f"partition number (1..{N}: clockwise l = 0..{N - 1}; {N + 1}..{2 * N}: counter-clockwise)"
+    )
+    ax.set_ylabel("value")
+    ax.set_title(r"Figure 5: bounds vs V* (d = 0, $\bar\tau$ = 2, all stations alerted)")
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+# ---------------------------------------------------------------------- Figure 6
+def plot_vsub(
+    pcomps: np.ndarray,
+    labels: np.ndarray,
+    vstar: np.ndarray,
+    vsub: np.ndarray,
+    N: int,
+    path: str | Path,
+) -> Path:
+    """Figure 6: ``V_sub`` and ``V*`` on the states of the clockwise partitions (32)."""
+    parts = select_bounds_partitions(pcomps, N)[:N]
+    pos = np.full(pcomps.shape[0], -1)
+    pos[parts] = np.arange(parts.size)
+    member = pos[labels]
+    xs = np.flatnonzero(member >= 0)
+    order = np.lexsort((vstar[xs], member[xs]))
+    xs = xs[order]
+    fig, (ax, ax2) = plt.subplots(
+        2, 1, figsize=(9.0, 5.6), sharex=True, gridspec_kw={"height_ratios": [2, 1]}
+    )
+    x = np.arange(xs.size)
+    ax.plot(x, vstar[xs], "-", color="tab:blue", lw=1.2, label="V*")
+    ax.plot(x, vsub[xs], "--", color="tab:orange", lw=1.2, label="V_sub (greedy w.r.t. V_low)")
+    ax.set_ylabel("value")
+    ax.legend(fontsize=8)
+    ax.set_title(r"Figure 6: V_sub vs V* (clockwise, d = 0, $\bar\tau$ = 2, all alerted)")
+    ax2.plot(x, vstar[xs] - vsub[xs], ".", ms=3, color="tab:purple")
+    ax2.set_ylabel("V* − V_sub")
+    ax2.set_xlabel("states, grouped by partition l = 0..N-1 (dotted)")
+    bounds = np.flatnonzero(np.diff(member[xs])) + 0.5
+    for a_ in (ax, ax2):
+        for b in bounds:
+            a_.axvline(b, color="grey", ls=":", lw=0.5)
+        a_.grid(alpha=0.2)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+# ---------------------------------------------------------------------- Figure 7
+def plot_histograms(
+    delays: dict[str, np.ndarray], loiters: dict[str, np.ndarray], path: str | Path
+) -> Path:
+    """Figure 7: histograms (fraction of serviced alerts) of the delay and the loiters."""
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(8.0, 6.4))
+    names = list(delays)
+    colors = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
+    width = 0.8 / max(1, len(names))
+    top = max((int(v.max()) for v in delays.values() if v.size), default=1)
+    bins = np.arange(0, top + 1)
+    for k, name in enumerate(names):
+        v = delays[name]
+        h = np.bincount(v, minlength=top + 1)[: top + 1] / max(1, v.size)
+        ax.bar(
+            bins + (k - (len(names) - 1) / 2) * width,
+            h,
+            width,
+            color=colors[k % 4],
+            label=f"{name} (n = {v.size})",
+        )
+    ax.set_xlabel("service delay (time from alert to first loiter, uncapped)")
+    ax.set_ylabel("fraction of serviced alerts")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, axis="y")
+    topl = max((int(v.max()) for v in loiters.values() if v.size), default=1)
+    lb = np.arange(0, topl + 1)
+    for k, name in enumerate(names):
+        v = loiters[name]
+        h = np.bincount(v, minlength=topl + 1)[: topl + 1] / max(1, v.size)
+        ax2.bar(lb + (k - (len(names) - 1) / 2) * width, h, width, color=colors[k % 4], label=name)
+    ax2.set_xlabel("number of loiters per serviced alert")
+    ax2.set_ylabel("fraction of serviced alerts")
+    ax2.set_xticks(lb)
+    ax2.legend(fontsize=8)
+    ax2.grid(alpha=0.3, axis="y")
+    fig.suptitle("Figure 7: service delay and loiters, optimal vs sub-optimal policy")
+    fig.tight_layout()
+    return _save(fig, path)
