@@ -484,7 +484,7 @@ def verify_remark2(
     """Remark 2: an ALP (soft aggregation) whose optimum depends on the cost, per solver."""
     names = [resolve_solver(s) for s in solvers]
     ex = find_cost_dependent_alp(seed, rtol=rtol)
-    inst = f"soft-aggregation (garnet seed {ex.seed}, n=6, K=2)"
+    inst = f"soft-agg garnet seed {ex.seed} (n=6, K=2)"
     out = []
     for solver in names:
         r1, m1 = _solve(ALP(ex.mdp, ex.basis, ex.cost1), solver)
