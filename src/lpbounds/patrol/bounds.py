@@ -226,7 +226,7 @@ class Lemma3Cardinality:
         rows = np.flatnonzero(diff.any(axis=1))
         return {
             "pairs": int((self.paper > 0).sum()),
-            "type1_loiter_pairs": int(self.type1.sum()),
+            "type1_partitions": int(self.type1.sum()),
             "pairs_differing": int(diff.sum()),
             "differing_taubar_values": sorted({int(t) for t in self.taubar[rows]}),
             "differing_all_type1_loiter": bool(diff[:, :2].sum() == 0 and self.type1[rows].all()),
