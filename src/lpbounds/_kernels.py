@@ -157,3 +157,67 @@ def hash_rows(owner, action, targets, probbits, out):  # pragma: no cover
             h = (h ^ np.uint64(probbits[r, ll])) * mult
             h ^= h >> np.uint64(27)
         out[r] = h
+
+
+@njit(parallel=True, **_OPTS)
+def bellman_max_stats(
+    indptr, reward, targets, probs, discount, v, out, arg, nchunks
+):  # pragma: no cover
+    """:func:`bellman_max` that also returns ``min`` and ``max`` of ``out - v`` (one pass)."""
+    n = indptr.shape[0] - 1
+    n_out = targets.shape[1]
+    lo = np.full(nchunks, np.inf)
+    hi = np.full(nchunks, -np.inf)
+    size = (n + nchunks - 1) // nchunks
+    for c in prange(nchunks):
+        start = c * size
+        end = min(n, start + size)
+        lc = np.inf
+        hc = -np.inf
+        for i in range(start, end):
+            best = -np.inf
+            best_r = -1
+            for r in range(indptr[i], indptr[i + 1]):
+                acc = 0.0
+                for ll in range(n_out):
+                    acc += probs[r, ll] * v[targets[r, ll]]
+                q = reward[r] + discount * acc
+                if q > best:
+                    best = q
+                    best_r = r
+            out[i] = best
+            arg[i] = best_r
+            d = best - v[i]
+            lc = min(lc, d)
+            hc = max(hc, d)
+        lo[c] = lc
+        hi[c] = hc
+    return lo.min(), hi.max()
+
+
+@njit(parallel=True, **_OPTS)
+def policy_sweep_stats(rows, reward, targets, probs, discount, v, out, nchunks):  # pragma: no cover
+    """:func:`policy_sweep` that also returns ``min`` and ``max`` of ``out - v`` (one pass)."""
+    n = rows.shape[0]
+    n_out = targets.shape[1]
+    lo = np.full(nchunks, np.inf)
+    hi = np.full(nchunks, -np.inf)
+    size = (n + nchunks - 1) // nchunks
+    for c in prange(nchunks):
+        start = c * size
+        end = min(n, start + size)
+        lc = np.inf
+        hc = -np.inf
+        for i in range(start, end):
+            r = rows[i]
+            acc = 0.0
+            for ll in range(n_out):
+                acc += probs[r, ll] * v[targets[r, ll]]
+            q = reward[r] + discount * acc
+            out[i] = q
+            d = q - v[i]
+            lc = min(lc, d)
+            hc = max(hc, d)
+        lo[c] = lc
+        hi[c] = hc
+    return lo.min(), hi.max()

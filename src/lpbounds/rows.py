@@ -352,6 +352,39 @@ class BellmanRows:
         )
         return out, arg
 
+    # fused sweeps used by the DP solvers: write into ``out`` and return the extremes
+    # of ``out - v`` (no validation: internal, hot path)
+    def _sweep_max(
+        self, v: np.ndarray, out: np.ndarray, arg: np.ndarray, nchunks: int
+    ) -> tuple[float, float]:
+        lo, hi = _kernels.bellman_max_stats(
+            self.indptr, self.reward, self.targets, self.probs, self.discount, v, out, arg, nchunks
+        )
+        return float(lo), float(hi)
+
+    def _sweep_policy(
+        self, sel: np.ndarray, v: np.ndarray, out: np.ndarray, nchunks: int
+    ) -> tuple[float, float]:
+        lo, hi = _kernels.policy_sweep_stats(
+            sel, self.reward, self.targets, self.probs, self.discount, v, out, nchunks
+        )
+        return float(lo), float(hi)
+
+    def _sweep_maxmin(self, v: np.ndarray, out: np.ndarray, arg: np.ndarray) -> tuple[float, float]:
+        _kernels.bellman_maxmin(
+            self.indptr,
+            self.action,
+            self.reward,
+            self.targets,
+            self.probs,
+            self.discount,
+            v,
+            out,
+            arg,
+        )
+        d = out - v
+        return float(d.min()), float(d.max())
+
     def evaluate_rows(self, rows: np.ndarray, v: Any) -> np.ndarray:
         """One policy-evaluation sweep: ``out[i] = q_{rows[i]}(v)``."""
         out = np.empty(self.n_vars)
