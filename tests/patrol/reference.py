@@ -91,7 +91,7 @@ class RefPatrol:
         return information(d, self.p_threat, self.a, self.b, self.c, self.g, self.mu1, self.mu2)
 
     def allowed(self, x):
-        l, w, d, *tau = x
+        l, _w, d, *tau = x
         acts = [CONTINUE, REVERSE]
         if l in self.stations and d < self.D:
             k = self.stations.index(l)
@@ -100,7 +100,7 @@ class RefPatrol:
         return acts
 
     def reward(self, x, action):
-        l, w, d, *tau = x
+        _l, _w, d, *tau = x
         r = -self.rho * min(max(tau), self.Gamma)
         if action == LOITER:
             r += self.info(d + 1) - self.info(d)
@@ -156,7 +156,7 @@ class RefPatrol:
                     )
                     best = max(best, q)
                 new.append(best)
-            delta = max(abs(a - b) for a, b in zip(new, v))
+            delta = max(abs(a - b) for a, b in zip(new, v, strict=True))
             v = new
             if delta <= tol:
                 break

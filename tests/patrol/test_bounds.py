@@ -39,7 +39,8 @@ def _canonical(rows: BellmanRows) -> set:
     out = set()
     for r in range(rows.n_rows):
         s = slice(a.indptr[r], a.indptr[r + 1])
-        entries = tuple(sorted(zip(a.indices[s].tolist(), np.round(a.data[s], 13).tolist())))
+        cols, vals = a.indices[s].tolist(), np.round(a.data[s], 13).tolist()
+        entries = tuple(sorted(zip(cols, vals, strict=True)))
         out.add((int(rows.owner[r]), int(rows.action[r]), round(float(b[r]), 13), entries))
     return out
 

@@ -1,0 +1,204 @@
+"""``lpbounds bounds MODEL``: LBLP and UBLP of a patrol instance, without enumerating states.
+
+Computes, from the ``M`` partitions alone (:mod:`lpbounds.patrol.bounds`):
+
+* UBLP (Theorem 4) and LBLP (Theorem 3): each as a solver-free fixed point and, unless
+  ``--no-lp``, as an LP with cvxpy (``--solver``), cross-checked against the fixed point;
+* the policy-free gap ``v*(i) - w*(i)`` per partition: for every state ``x`` of ``S_i``,
+  ``w*(i) <= V*(x) <= v*(i)``, so the gap bounds how far either bound is from ``V*``;
+* Lemma 3's ``|T(i, u)|`` against the construction (where the Gamma cap changes it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import time
+from typing import Any
+
+import numpy as np
+from rich.table import Table
+
+from ..dp import solve_exact
+from ..errors import SolverError
+from ..instances import load_instance
+from ..tolerances import LP_COMPARE_RTOL
+from ._common import add_model_argument, console, progress
+
+WORST = 10
+
+
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    p = sub.add_parser(
+        "bounds",
+        help="UBLP/LBLP bounds of a patrol instance from its partitions (no state enumeration)",
+    )
+    add_model_argument(p, default="patrol-paper")
+    p.add_argument("--solver", default="HIGHS", help="LP solver (HIGHS, CLARABEL, ...)")
+    p.add_argument("--no-lp", action="store_true", help="fixed points only (no LP solve)")
+    p.add_argument("--json", metavar="PATH", help="also write the results as JSON")
+    p.set_defaults(func=run)
+
+
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..patrol.bounds import LBLP, UBLP, lemma3_cardinality
+    from ..patrol.instance import params_from_instance
+    from ..patrol.partitions import partition_components
+
+    inst = load_instance(args.model)
+    params = params_from_instance(inst)
+    out: dict[str, Any] = {
+        "instance": inst.name,
+        "n_states": params.n_states,
+        "n_partitions": params.n_partitions,
+        "allow_empty_loiter": params.allow_empty_loiter,
+    }
+    times: dict[str, float] = {}
+    t_all = time.perf_counter()
+    with progress() as prog:
+        steps = 4 + (0 if args.no_lp else 2)
+        task = prog.add_task(f"bounds of {inst.name}", total=steps, status="")
+        values: dict[str, np.ndarray] = {}
+        for cls in (UBLP, LBLP):
+            prog.update(task, description=f"{cls.name}: building rows", status="")
+            t0 = time.perf_counter()
+            lp = cls(params)
+            times[f"{cls.name.lower()}_build"] = time.perf_counter() - t0
+            prog.update(task, description=f"{cls.name}: fixed point")
+            t0 = time.perf_counter()
+            fp = solve_exact(lp.rows)
+            times[f"{cls.name.lower()}_fixed_point"] = time.perf_counter() - t0
+            values[cls.name] = fp.values
+            entry: dict[str, Any] = {
+                "n_rows": lp.rows.n_rows,
+                "fixed_point": {
+                    "iterations": fp.iterations,
+                    "residual": fp.residual,
+                    "error_bound": fp.error_bound,
+                    "seconds": fp.seconds,
+                },
+            }
+            prog.advance(task)
+            if not args.no_lp:
+                prog.update(task, description=f"{cls.name}: LP ({args.solver})")
+                t0 = time.perf_counter()
+                res = lp.solve(args.solver)
+                times[f"{cls.name.lower()}_lp"] = time.perf_counter() - t0
+                diff = float(np.abs(res.values - fp.values).max())
+                scale = max(1.0, float(np.abs(fp.values).max()))
+                entry["lp"] = {
+                    "solver": res.solver,
+                    "status": str(res.status),
+                    "objective": res.objective,
+                    "seconds": times[f"{cls.name.lower()}_lp"],
+                    "primal_residual": res.primal_residual,
+                    "max_abs_diff_fixed_point": diff,
+                    "agrees": diff <= LP_COMPARE_RTOL * scale,
+                    "tolerance": LP_COMPARE_RTOL * scale,
+                }
+                prog.advance(task)
+            out[cls.name] = entry
+            del lp
+        prog.update(task, description="Lemma 3 cardinalities")
+        t0 = time.perf_counter()
+        out["lemma3"] = lemma3_cardinality(params).summary()
+        times["lemma3"] = time.perf_counter() - t0
+        prog.advance(task)
+        gap = values["UBLP"] - values["LBLP"]
+        comps = partition_components(params)
+        order = np.argsort(-gap)[:WORST]
+        names = ["l", "w", "d", *[f"A{j + 1}" for j in range(params.m)], "taubar"]
+        out["gap"] = {
+            "min": float(gap.min()),
+            "mean": float(gap.mean()),
+            "median": float(np.median(gap)),
+            "max": float(gap.max()),
+            "negative_count": int((gap < -1e-9).sum()),
+            "relative_to_value_range": float(
+                gap.max() / max(1e-300, values["UBLP"].max() - values["LBLP"].min())
+            ),
+            "worst": [
+                {
+                    "partition": int(i),
+                    "key": dict(zip(names, comps[i].tolist(), strict=True)),
+                    "upper": float(values["UBLP"][i]),
+                    "lower": float(values["LBLP"][i]),
+                    "gap": float(gap[i]),
+                }
+                for i in order
+            ],
+        }
+        prog.advance(task)
+    times["total"] = time.perf_counter() - t_all
+    out["seconds"] = times
+    out["peak_rss_mb"] = _peak_mb()
+    _print(out, params)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(out, fh, indent=2)
+    bad = [k for k in ("UBLP", "LBLP") if "lp" in out[k] and not out[k]["lp"]["agrees"]]
+    if out["gap"]["negative_count"]:
+        console.print("[red]the lower bound exceeds the upper bound somewhere[/red]")
+        return 1
+    if bad:
+        raise SolverError(f"LP optimum differs from the fixed point for {bad}")
+    return 0
+
+
+def _print(out: dict[str, Any], params: Any) -> None:
+    t = Table(title=f"LBLP / UBLP bounds of {out['instance']}", show_header=False)
+    t.add_row("|S| (eq. 27)", f"{out['n_states']:,}")
+    t.add_row("M (eq. 28)", f"{out['n_partitions']:,}")
+    t.add_row("allow_empty_loiter", str(out["allow_empty_loiter"]))
+    for name in ("UBLP", "LBLP"):
+        e = out[name]
+        fp = e["fixed_point"]
+        t.add_row(
+            f"{name} fixed point",
+            f"{e['n_rows']:,} rows, {fp['iterations']} iterations, residual "
+            f"{fp['residual']:.2e}, {fp['seconds']:.2f} s",
+        )
+        if "lp" in e:
+            lp = e["lp"]
+            t.add_row(
+                f"{name} LP ({lp['solver']})",
+                f"{lp['status']}, {lp['seconds']:.2f} s, max |LP - fixed point| "
+                f"{lp['max_abs_diff_fixed_point']:.2e} (tol {lp['tolerance']:.1e})",
+            )
+    g = out["gap"]
+    t.add_row(
+        "gap v* - w* per partition",
+        f"min {g['min']:.3e}  mean {g['mean']:.3e}  median {g['median']:.3e}  max {g['max']:.3e}",
+    )
+    lem = out["lemma3"]
+    t.add_row(
+        "Lemma 3 |T(i,u)|",
+        f"{lem['pairs_differing']} of {lem['pairs']} pairs differ from the paper's formula "
+        f"(all at taubar = {lem['differing_taubar_values']}, the Gamma cap)",
+    )
+    t.add_row("time (s)", ", ".join(f"{k} {v:.2f}" for k, v in out["seconds"].items()))
+    t.add_row("peak memory", f"{out['peak_rss_mb']:.0f} MB")
+    console.print(t)
+    w = Table(title=f"largest gaps v* - w* (of {out['n_partitions']:,} partitions)")
+    for col in ("partition", "l", "w", "d", "A", "taubar", "lower w*", "upper v*", "gap"):
+        w.add_column(col, justify="right")
+    for row in g["worst"]:
+        k = row["key"]
+        a = "".join(str(k[f"A{j + 1}"]) for j in range(params.m))
+        w.add_row(
+            str(row["partition"]),
+            str(k["l"]),
+            f"{k['w']:+d}",
+            str(k["d"]),
+            a,
+            str(k["taubar"]),
+            f"{row['lower']:.6f}",
+            f"{row['upper']:.6f}",
+            f"{row['gap']:.3e}",
+        )
+    console.print(w)
