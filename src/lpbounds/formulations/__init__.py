@@ -4,6 +4,7 @@ from .alp import ALP, CostDependenceExample, find_cost_dependent_alp, soft_aggre
 from .base import Formulation, LPResult, Status, installed_lp_solvers, resolve_solver
 from .elp import ELP
 from .ib import IB, LLP
+from .nlp import NLP, NLPIteration, NLPResult
 from .rlp import RLP
 from .rows_lp import RowsLP
 from .slp import SLP
@@ -13,11 +14,14 @@ __all__ = [
     "ELP",
     "IB",
     "LLP",
+    "NLP",
     "RLP",
     "SLP",
     "CostDependenceExample",
     "Formulation",
     "LPResult",
+    "NLPIteration",
+    "NLPResult",
     "RowsLP",
     "Status",
     "find_cost_dependent_alp",

@@ -316,7 +316,7 @@ class NLP:
         )
 
     def strategy_value(self, sel: np.ndarray) -> tuple[np.ndarray, float]:
-        """``v_sigma`` (least element of the strategy's rows) and its residual ``||T_sigma v - v||``."""
+        """``v_sigma`` (the least element of the strategy's rows) and ``||T_sigma v - v||_inf``."""
         sub = self.strategy_rows(sel)
         res = solve_exact(sub, method="pi", tol=_EXACT_RTOL * self.scale, evaluation="direct")
         v = res.values
@@ -342,6 +342,7 @@ class NLP:
         cuts_per_round: int = 10,
         backend: str = "highspy",
         time_limit: float | None = None,
+        cglp_rows: str = "all",
         progress: bool = False,
         raise_on_failure: bool = False,
         **solver_options: Any,
@@ -368,6 +369,10 @@ class NLP:
             cvxpy with ``solver``.
         time_limit : float, optional
             Cutting planes: stop after this many seconds.
+        cglp_rows : {"all", "binding"}
+            Cutting planes: the master rows the cut-generating LP is built on (all of
+            them, or the single-term rows and the cuts binding at the master's point:
+            smaller CGLPs, weaker cuts).
         progress : bool
             Show a rich progress bar (on stderr) with the bracket.
         raise_on_failure : bool
@@ -387,7 +392,7 @@ class NLP:
         if max_iter is not None and max_iter < 1:
             raise ValidationError(f"max_iter must be >= 1; got {max_iter}")
         t0 = time.perf_counter()
-        with _progress_bar(progress, method, max_iter) as tick:
+        with _progress_bar(progress, method, max_iter) as tick, _serial_kernels(self.rows.n_rows):
             if method == "cutting-planes":
                 out = self._cutting_planes(
                     solver,
@@ -396,6 +401,7 @@ class NLP:
                     cuts_per_round,
                     backend,
                     time_limit,
+                    cglp_rows,
                     tick,
                     solver_options,
                 )
@@ -496,7 +502,7 @@ class NLP:
         converged = False
         v = np.full(self.rows.n_vars, self.box[1])
         it = 0
-        for it in range(1, max_iter + 1):  # noqa: B007
+        for it in range(1, max_iter + 1):
             v, ub = self.strategy_upper_bound(sel)
             upper = min(upper, ub)
             new = self.best_terms(v, current=sel)
@@ -592,6 +598,7 @@ class NLP:
         cuts_per_round: int,
         backend: str,
         time_limit: float | None,
+        cglp_rows: str,
         tick: Callable[..., None],
         options: dict[str, Any],
     ) -> NLPResult:
@@ -605,6 +612,7 @@ class NLP:
             max_rounds=max_rounds,
             cuts_per_round=cuts_per_round,
             time_limit=time_limit,
+            cglp_rows=cglp_rows,
             on_round=tick,
             **options,
         )
@@ -618,12 +626,13 @@ class NLP:
             iterations=out.rounds,
             cuts=out.cuts,
             log=out.log,
-            solver=f"HIGHS (highspy, persistent)" if backend == "highspy" else f"{solver} (cvxpy)",
+            solver="HIGHS (highspy, persistent)" if backend == "highspy" else f"{solver} (cvxpy)",
             extra={
                 "cut_alpha": out.cut_alpha,
                 "cut_beta": out.cut_beta,
                 "master_point": out.master_point,
                 "master_objective": out.master_objective,
+                "cuts_in_last_master": out.cuts_in_last_master,
                 "box": self.box,
             },
         )
@@ -670,6 +679,28 @@ class NLPMILP:
             )
             cons.append(s @ self.z == 1)
         self.problem = cp.Problem(cp.Minimize(nlp.cost @ self.w), cons)
+
+
+#: Below this many rows the numba kernels run on one thread: a parallel launch costs about
+#: 20 ms on a loaded 2-core machine (measured), far more than the work on a small system,
+#: and the cutting planes and strategy iteration call them thousands of times.
+_SERIAL_BELOW_ROWS = 200_000
+
+
+@contextmanager
+def _serial_kernels(n_rows: int) -> Iterator[None]:
+    """Run numba's parallel kernels on one thread (this thread only) for small systems."""
+    import numba
+
+    if n_rows >= _SERIAL_BELOW_ROWS:
+        yield
+        return
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(old)
 
 
 @contextmanager

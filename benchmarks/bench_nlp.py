@@ -1,0 +1,170 @@
+"""How the NLP's methods converge on small random MDPs (the table in docs/nlp.md).
+
+For each instance (garnet MDP, random partition, cost all ones) every method of
+:meth:`lpbounds.NLP.solve` is run and its iterations, cuts, seconds and final bracket
+gap are tabulated, with ``c'w*`` from strategy iteration checked against the other exact
+methods. The cutting planes' bracket is also checked against ``c'w*`` at every round (a
+round whose lower bound exceeds ``c'w*`` would mean an invalid cut).
+
+Usage::
+
+    python benchmarks/bench_nlp.py            # the 12 instances of docs/nlp.md
+    python benchmarks/bench_nlp.py --quick    # 4 instances
+    python benchmarks/bench_nlp.py --write    # also replace the nlp section of docs/benchmarks.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from lpbounds.formulations.nlp import NLP
+from lpbounds.generators import garnet, random_partition
+
+#: (states, actions, outcomes, partitions, seed)
+INSTANCES: list[tuple[int, int, int, int, int]] = [
+    (8, 2, 2, 3, 0),
+    (10, 2, 2, 3, 1),
+    (12, 2, 3, 4, 2),
+    (15, 2, 2, 4, 0),
+    (15, 2, 2, 4, 2),
+    (15, 3, 2, 4, 3),
+    (20, 2, 2, 4, 4),
+    (20, 3, 3, 5, 5),
+    (25, 2, 2, 5, 6),
+    (25, 3, 2, 6, 7),
+    (30, 2, 3, 6, 8),
+    (30, 3, 3, 6, 9),
+]
+QUICK = INSTANCES[:4]
+METHODS = ("fixed-point", "strategy-iteration", "milp", "cutting-planes")
+MARK_START, MARK_END = "<!-- nlp:start -->", "<!-- nlp:end -->"
+
+
+def run(instances: list[tuple[int, int, int, int, int]], max_rounds: int) -> list[dict]:
+    rows = []
+    for n, a, l_out, m, seed in instances:
+        mdp = garnet(n, a, l_out, 0.9, seed=seed)
+        part = random_partition(n, m, seed=seed)
+        nlp = NLP(mdp, part)
+        exact = nlp.solve("strategy-iteration")
+        opt = float(nlp.cost @ exact.values)
+        for method in METHODS:
+            kw = {"max_iter": max_rounds} if method == "cutting-planes" else {}
+            r = nlp.solve(method, **kw)
+            ok_bracket = all(
+                e.lower <= opt + 1e-9 * max(1.0, abs(opt)) for e in r.log if np.isfinite(e.lower)
+            ) and all(
+                e.upper >= opt - 1e-9 * max(1.0, abs(opt)) for e in r.log if np.isfinite(e.upper)
+            )
+            rows.append(
+                {
+                    "instance": f"n={n} A={a} L={l_out} M={m} s={seed}",
+                    "disj": f"{nlp.n_disjunctions}/{int((nlp.disj_size >= 2).sum())}",
+                    "terms": nlp.rows.n_rows,
+                    "opt": opt,
+                    "method": method,
+                    "iterations": r.iterations,
+                    "cuts": r.cuts,
+                    "seconds": r.seconds,
+                    "gap": r.gap,
+                    "rel_gap": r.relative_gap,
+                    "converged": r.converged,
+                    "stop": r.stop_reason,
+                    "values_err": float(np.abs(r.values - exact.values).max()),
+                    "bracket_ok": ok_bracket,
+                    "first_exact_upper": _first_exact_upper(r, opt),
+                }
+            )
+            print(
+                f"{rows[-1]['instance']:28s} {method:19s} it={r.iterations:4d} "
+                f"cuts={r.cuts:5d} t={r.seconds:7.3f}s gap={r.gap:.2e} "
+                f"{'ok' if r.converged else 'NOT converged'} ({r.stop_reason})"
+                f"{'' if ok_bracket else '  BRACKET VIOLATED'}",
+                flush=True,
+            )
+    return rows
+
+
+def _first_exact_upper(r, opt: float) -> int | None:
+    """The first round whose upper bound equals ``c'w*`` to 1e-9 (cutting planes)."""
+    if r.method != "cutting-planes":
+        return None
+    for e in r.log:
+        if e.upper <= opt + 1e-9 * max(1.0, abs(opt)):
+            return e.iteration
+    return None
+
+
+def table(rows: list[dict], max_rounds: int) -> str:
+    lines = [
+        f"Garnet MDPs (discount 0.9), random partitions, cost all ones; cutting planes with "
+        f"at most 10 cuts a round, {max_rounds} rounds, gap target 1e-6 relative. Machine: "
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores (shared), "
+        f"Python {sys.version.split()[0]}, {time.strftime('%Y-%m-%d')}. "
+        "`disj` = disjunctions / those with 2+ terms; `gap` = upper - lower bound on c'w* "
+        "at the end; `exact UB at` = the round whose upper bound (the strategy read off the "
+        "master point) first equals c'w*; `bracket` = lower <= c'w* <= upper at every "
+        "round.",
+        "",
+        "| instance | disj | terms | c'w* | method | iterations | cuts | seconds | gap | "
+        "converged | exact UB at | bracket |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['instance']} | {r['disj']} | {r['terms']} | {r['opt']:.6f} | {r['method']} | "
+            f"{r['iterations']} | {r['cuts']} | {r['seconds']:.3f} | {r['gap']:.1e} | "
+            f"{'yes' if r['converged'] else 'no: ' + r['stop']} | "
+            f"{r['first_exact_upper'] if r['first_exact_upper'] is not None else '-'} | "
+            f"{'ok' if r['bracket_ok'] else 'VIOLATED'} |"
+        )
+    cp_rows = [r for r in rows if r["method"] == "cutting-planes"]
+    n_conv = sum(r["converged"] for r in cp_rows)
+    lines += [
+        "",
+        f"Cutting planes: {n_conv} of {len(cp_rows)} instances closed the gap; rounds "
+        f"{min(r['iterations'] for r in cp_rows)}-{max(r['iterations'] for r in cp_rows)}, "
+        f"largest final relative gap {max(r['rel_gap'] for r in cp_rows):.1e}.",
+    ]
+    return "\n".join(lines)
+
+
+def write_section(text: str, path: Path) -> None:
+    block = f"{MARK_START}\n## NLP (disjunctive lower bound): convergence\n\n{text}\n{MARK_END}"
+    if path.exists():
+        old = path.read_text()
+        if MARK_START in old and MARK_END in old:
+            head, rest = old.split(MARK_START, 1)
+            _, tail = rest.split(MARK_END, 1)
+            new = head + block + tail
+        else:
+            new = old.rstrip("\n") + "\n\n" + block + "\n"
+    else:
+        new = "# Benchmarks\n\n" + block + "\n"
+    path.write_text(new)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="4 instances only")
+    ap.add_argument("--max-rounds", type=int, default=200)
+    ap.add_argument("--write", action="store_true", help="update docs/benchmarks.md")
+    args = ap.parse_args()
+    rows = run(QUICK if args.quick else INSTANCES, args.max_rounds)
+    text = table(rows, args.max_rounds)
+    print()
+    print(text)
+    if args.write:
+        write_section(text, Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md")
+    return 0 if all(r["bracket_ok"] for r in rows) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,272 @@
+"""Tests of the disjunctive lower-bound program NLP (paper eq. 25) and its four methods.
+
+The reference is a deliberately simple loop written here from the paper's eq. 25: value
+iteration on ``w(i) = max_u min_{x in S_i} [R_u(x) + lambda sum_l p_l w(f-bar(x,u,Y_l))]``
+over the *states* of each partition (no merging of rows, no package kernels). ``V*`` comes
+from exact DP (policy iteration of :func:`lpbounds.dp.solve_exact`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from lpbounds.dp import solve_exact
+from lpbounds.errors import SolverNotInstalledError, ValidationError
+from lpbounds.formulations import NLP
+from lpbounds.formulations.nlp_cuts import (
+    CutGeneratingLP,
+    NLPMaster,
+    cglp_data,
+    highs_solve,
+    master_data,
+)
+from lpbounds.generators import garnet, random_partition
+from lpbounds.partition import Partition
+
+#: methods that must agree with the reference to this (relative to max(1, max|w*|))
+AGREE_RTOL = 1e-9
+#: slack of "bracket contains c'w*": the reference's own error (~1e-12 relative) plus rounding
+BRACKET_RTOL = 1e-9
+
+
+def reference_w(mdp, partition, tol_rel: float = 1e-14) -> np.ndarray:
+    """Eq. 25's fixed point by plain loops over partitions, actions and member states."""
+    labels = partition.labels
+    m = partition.n_partitions
+    probs = mdp.probabilities_full()
+    lam = mdp.discount
+    members = [np.flatnonzero(labels == i) for i in range(m)]
+    scale = np.abs(mdp.rewards).max() / (1 - lam)
+    w = np.zeros(m)
+    for _ in range(20_000):
+        new = np.empty(m)
+        for i in range(m):
+            best_u = -np.inf
+            for u in range(mdp.n_actions):
+                worst = np.inf
+                for x in members[i]:
+                    if not mdp.allowed[x, u]:
+                        continue
+                    q = mdp.rewards[x, u]
+                    for k, p in zip(mdp.successors[x, u], probs[x, u], strict=True):
+                        q += lam * p * w[labels[k]]
+                    worst = min(worst, q)
+                if worst < np.inf:
+                    best_u = max(best_u, worst)
+            new[i] = best_u
+        diff = np.abs(new - w).max()
+        w = new
+        if diff <= tol_rel * scale * (1 - lam):
+            return w
+    raise AssertionError("reference value iteration did not converge")
+
+
+def instance(n: int, a: int, l_out: int, m: int, seed: int):
+    mdp = garnet(n, a, l_out, 0.9, seed=seed)
+    return mdp, random_partition(n, m, seed=seed)
+
+
+SMALL = [(8, 2, 2, 3, 0), (12, 3, 2, 4, 1), (20, 2, 3, 5, 2), (30, 3, 3, 6, 3)]
+
+
+# ---------------------------------------------------------------------- exact methods
+@pytest.mark.parametrize("spec", SMALL, ids=lambda s: "n{}-A{}-L{}-M{}-s{}".format(*s))
+def test_exact_methods_agree_with_reference_and_bound_v_star(spec):
+    mdp, part = instance(*spec)
+    nlp = NLP(mdp, part)
+    ref = reference_w(mdp, part)
+    tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
+    results = {m: nlp.solve(m) for m in ("fixed-point", "strategy-iteration", "milp")}
+    for method, r in results.items():
+        err = np.abs(r.values - ref).max()
+        assert err <= tol, f"{method}: max|w - w_ref| = {err:.2e} > {tol:.1e}"
+        assert r.converged, f"{method} did not converge: {r.stop_reason}"
+        opt = float(nlp.cost @ ref)
+        slack = BRACKET_RTOL * max(1.0, abs(opt))
+        assert r.lower_bound - slack <= opt <= r.upper_bound + slack, (
+            f"{method}: bracket [{r.lower_bound}, {r.upper_bound}] misses c'w* = {opt}"
+        )
+        np.testing.assert_allclose(r.state_values, ref[part.labels], rtol=0, atol=tol)
+    # w*(i) <= min over S_i of V* (exact DP), and the certified lower_values too
+    v_star = solve_exact(mdp, method="pi").values
+    vmin = part.aggregate(v_star, "min")
+    slack = 1e-9 * max(1.0, np.abs(v_star).max())
+    w = results["strategy-iteration"]
+    assert (w.values <= vmin + slack).all(), f"w* - min V*: {(w.values - vmin).max():.2e} > 0"
+    assert (w.lower_values <= ref + slack).all(), "lower_values exceed w*"
+
+
+def test_strategy_iteration_upper_bounds_decrease():
+    mdp, part = instance(30, 3, 3, 6, 3)
+    r = NLP(mdp, part).solve("strategy-iteration")
+    ups = [e.upper for e in r.log]
+    assert all(b <= a + 1e-12 * max(1.0, abs(a)) for a, b in zip(ups, ups[1:], strict=False)), (
+        f"strategy-iteration upper bounds increased: {ups}"
+    )
+
+
+def test_cost_independence():
+    """w* is the least element (Fact 2): every c > 0 gives the same minimiser."""
+    mdp, part = instance(20, 2, 3, 5, 2)
+    ref = reference_w(mdp, part)
+    rng = np.random.default_rng(7)
+    tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
+    for _ in range(2):
+        c = rng.uniform(0.1, 5.0, size=part.n_partitions)
+        nlp = NLP(mdp, part, partition_cost=c)
+        w = nlp.solve("milp").values  # the MILP's minimiser depends on c only if w* does
+        assert np.abs(w - ref).max() <= tol, f"MILP minimiser changed with cost {c}"
+        cp_res = nlp.solve("cutting-planes", max_iter=40)
+        opt = float(c @ ref)
+        slack = BRACKET_RTOL * max(1.0, abs(opt))
+        assert cp_res.lower_bound <= opt + slack <= cp_res.upper_bound + 2 * slack
+    # state weights: c-bar is their sum over each partition
+    c_state = rng.uniform(0.5, 2.0, size=mdp.n_states)
+    nlp = NLP(mdp, part, cost=c_state)
+    np.testing.assert_allclose(nlp.cost, np.bincount(part.labels, weights=c_state))
+    assert np.abs(nlp.solve("strategy-iteration").values - ref).max() <= tol
+
+
+# ---------------------------------------------------------------------- cutting planes
+def _check_bracket_every_round(nlp, r, ref):
+    opt = float(nlp.cost @ ref)
+    slack = BRACKET_RTOL * max(1.0, abs(opt))
+    for e in r.log:
+        assert e.lower <= opt + slack, (
+            f"round {e.iteration}: lower bound {e.lower!r} > c'w* = {opt!r}: an invalid cut"
+        )
+        assert e.upper >= opt - slack, f"round {e.iteration}: upper bound {e.upper!r} < c'w*"
+    # every cut is satisfied by w* (validity checked directly)
+    alpha, beta = r.extra["cut_alpha"], r.extra["cut_beta"]
+    if len(beta):
+        lhs = alpha @ ref
+        worst = float((beta - lhs).max())
+        assert worst <= 1e-9 * max(1.0, np.abs(beta).max()), f"a cut cuts w* off by {worst:.2e}"
+
+
+@pytest.mark.parametrize(
+    "spec", [(8, 2, 2, 3, 0), (10, 2, 2, 3, 1), (15, 2, 2, 4, 0)], ids=lambda s: f"n{s[0]}-s{s[4]}"
+)
+def test_cutting_planes_bracket_valid_every_round_and_closes(spec):
+    mdp, part = instance(*spec)
+    nlp = NLP(mdp, part)
+    ref = reference_w(mdp, part)
+    r = nlp.solve("cutting-planes", max_iter=120)
+    _check_bracket_every_round(nlp, r, ref)
+    assert r.converged, f"expected convergence on this instance: {r.summary()}"
+    assert r.gap <= r.gap_rtol * max(1.0, abs(r.upper_bound)), r.summary()
+    assert r.cuts == sum(e.cuts_added for e in r.log)
+    assert r.iterations == len(r.log)
+
+
+def test_cutting_planes_stall_is_reported():
+    """A run stopped at its round limit says so (converged False, reason, final gap > 0)."""
+    mdp, part = instance(12, 2, 3, 4, 2)
+    nlp = NLP(mdp, part)
+    r = nlp.solve("cutting-planes", max_iter=3, cuts_per_round=1)
+    assert not r.converged and r.stop_reason == "max_rounds" and r.gap > 0, r.summary()
+    _check_bracket_every_round(nlp, r, reference_w(mdp, part))
+    with pytest.raises(Exception, match="NOT converged"):
+        nlp.solve("cutting-planes", max_iter=3, cuts_per_round=1, raise_on_failure=True)
+
+
+def test_persistent_master_matches_cold_solves():
+    """The persistent HiGHS master's value = a cold cvxpy solve of the same master (2 solvers)."""
+    mdp, part = instance(15, 2, 2, 4, 0)
+    nlp = NLP(mdp, part)
+    r = nlp.solve("cutting-planes", max_iter=8)
+    k = r.extra["cuts_in_last_master"]
+    a, b = nlp.term_matrix
+    single = nlp.single_rows
+    import scipy.sparse as sp
+
+    g = sp.vstack([a[single], sp.csr_matrix(r.extra["cut_alpha"][:k])], format="csr")
+    h = np.r_[b[single], r.extra["cut_beta"][:k]]
+    m = nlp.rows.n_vars
+    lo, hi = np.full(m, nlp.box[0]), np.full(m, nlp.box[1])
+    persistent = r.extra["master_objective"]
+    for solver in ("HIGHS", "CLARABEL"):
+        cold = NLPMaster.build(nlp.cost, g, h, lo, hi).solve(solver)
+        assert abs(cold.objective - persistent) <= 1e-6 * max(1.0, abs(persistent)), (
+            f"{solver}: cold master {cold.objective!r} vs persistent {persistent!r}"
+        )
+    # the CGLP: highspy vs cvxpy on the same data
+    wbar = r.extra["master_point"]
+    d = int(np.flatnonzero(nlp.disj_size >= 2)[0])
+    sl = slice(nlp.disj_start[d], nlp.disj_start[d + 1])
+    data = cglp_data(wbar, g, h, lo, hi, a[sl], b[sl])
+    hs = highs_solve(data)
+    cv = CutGeneratingLP(data).solve("HIGHS")
+    assert abs(hs.objective - cv.objective) <= 1e-9, (hs.objective, cv.objective)
+    # and the master data helper agrees with itself through highspy
+    hm = highs_solve(master_data(nlp.cost, g, h, lo, hi))
+    assert abs(hm.objective - persistent) <= 1e-7 * max(1.0, abs(persistent))
+
+
+def test_cvxpy_backend_gives_valid_bracket():
+    mdp, part = instance(8, 2, 2, 3, 0)
+    nlp = NLP(mdp, part)
+    ref = reference_w(mdp, part)
+    r = nlp.solve("cutting-planes", backend="cvxpy", max_iter=4)
+    _check_bracket_every_round(nlp, r, ref)
+    assert r.solver.endswith("(cvxpy)")
+
+
+def test_progress_bar_runs():
+    mdp, part = instance(8, 2, 2, 3, 0)
+    r = NLP(mdp, part).solve("strategy-iteration", progress=True)
+    assert r.converged
+
+
+# ---------------------------------------------------------------------- bad input
+def test_bad_input_errors():
+    mdp, part = instance(8, 2, 2, 3, 0)
+    with pytest.raises(ValidationError, match=r"cost\[2\] = -1.0 is negative"):
+        NLP(mdp, part, cost=np.r_[1.0, 1.0, -1.0, np.ones(5)])
+    with pytest.raises(ValidationError, match="cost must have length 8"):
+        NLP(mdp, part, cost=np.ones(7))
+    with pytest.raises(ValidationError, match="partition_cost must have length 3"):
+        NLP(mdp, part, partition_cost=np.ones(4))
+    with pytest.raises(ValidationError, match="not both"):
+        NLP(mdp, part, cost=np.ones(8), partition_cost=np.ones(3))
+    with pytest.raises(ValidationError, match="the partition has 9 states"):
+        NLP(mdp, Partition(np.zeros(9, dtype=int)))
+    nlp = NLP(mdp, part)
+    with pytest.raises(ValidationError, match="unknown NLP method 'simplex'"):
+        nlp.solve("simplex")
+    with pytest.raises(ValidationError, match="backend='highspy' solves with HiGHS"):
+        nlp.solve("cutting-planes", solver="CLARABEL")
+    with pytest.raises(ValidationError, match="backend must be"):
+        nlp.solve("cutting-planes", backend="gurobi")
+    with pytest.raises(ValidationError, match="cuts_per_round must be >= 1"):
+        nlp.solve("cutting-planes", cuts_per_round=0)
+    with pytest.raises(ValidationError, match="max_iter must be >= 1"):
+        nlp.solve("strategy-iteration", max_iter=0)
+    with pytest.raises(SolverNotInstalledError, match="unknown solver"):
+        nlp.solve("milp", solver="NOSUCHSOLVER")
+
+
+# ---------------------------------------------------------------------- property
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    n=st.integers(2, 12),
+    a=st.integers(1, 3),
+    l_out=st.integers(1, 3),
+    m_frac=st.floats(0.1, 1.0),
+    seed=st.integers(0, 10_000),
+    discount=st.sampled_from([0.5, 0.9, 0.95]),
+)
+def test_property_game_fixed_point_equals_milp(n, a, l_out, m_frac, seed, discount):
+    mdp = garnet(n, a, l_out, discount, seed=seed, reward_range=(-1.0, 2.0))
+    m = max(1, int(round(m_frac * n)))
+    part = random_partition(n, m, seed=seed + 1)
+    nlp = NLP(mdp, part)
+    ref = reference_w(mdp, part)
+    tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
+    fp = nlp.solve("fixed-point").values
+    milp = nlp.solve("milp").values
+    assert np.abs(fp - ref).max() <= tol, f"fixed point vs reference {np.abs(fp - ref).max():.2e}"
+    assert np.abs(milp - ref).max() <= tol, f"milp vs reference {np.abs(milp - ref).max():.2e}"
