@@ -346,7 +346,8 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
         f"{_fmt(po['suboptimal_tolerance'])} in one step on "
         f"{100 * po['suboptimal_fraction']:.2f} % of states (largest one-step loss "
         f"{_fmt(po['max_one_step_loss'])}). max(V* - V_sub) = "
-        f"{_fmt(po['max_vstar_minus_vsub'])}, mean {_fmt(po['mean_vstar_minus_vsub'])}; "
+        f"{_fmt(po['max_vstar_minus_vsub'])} (at {_st(po['max_vstar_minus_vsub_state'])}), "
+        f"mean {_fmt(po['mean_vstar_minus_vsub'])}; "
         f"V_sub by {po['vsub_method']} evaluation, residual {_fmt(po['vsub_residual'])}.\n"
     )
     add(_img(files, "fig5", out, "Figure 5: bounds vs V*") + "\n")
@@ -418,9 +419,15 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
     )
 
     # times
-    add("## Times\n")
+    add("## Times and memory\n")
     secs = s.get("seconds", {})
-    add(markdown_table(["step", "seconds"], [[k, round(x, 3)] for k, x in secs.items()]))
+    rss = s.get("peak_rss_mb", {})
+    add(
+        markdown_table(
+            ["step", "seconds", "peak RSS after the step (MB)"],
+            [[k, round(x, 3), round(rss.get(k, float("nan")))] for k, x in secs.items()],
+        )
+    )
     add("")
     path.write_text("\n".join(L) + "\n")
     return path

@@ -368,7 +368,9 @@ def simulate(
     m = len(params.stations)
     if y.ndim != 1 or y.size == 0 or y.min() < 0 or y.max() > m:
         raise ValidationError(f"outcomes must be a non-empty 1-d array of 0..{m}")
-    comps = np.ascontiguousarray(model.state_components(), dtype=np.int64)
+    comps = np.ascontiguousarray(model.state_components())
+    if not np.issubdtype(comps.dtype, np.integer):
+        raise ValidationError(f"state components must be integers; got {comps.dtype}")
     if start is None:
         start = int(
             np.asarray(model.encode(0, 1, 0, np.zeros((1, m), dtype=np.int64))).reshape(-1)[0]
