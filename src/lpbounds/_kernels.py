@@ -221,3 +221,146 @@ def policy_sweep_stats(rows, reward, targets, probs, discount, v, out, nchunks):
         lo[c] = lc
         hi[c] = hc
     return lo.min(), hi.max()
+
+
+# ---------------------------------------------------------------------- post-decision form
+# Fast path of :class:`lpbounds.rows.PostDecisionRows`: when every allowed pair's outcome
+# tuple is a function of its first successor ``y = f(x, u, Y_0)``, a sweep computes
+# ``w[k] = sum_l probs[l] v[outcomes[k, l]]`` once per distinct ``y`` and then
+# ``q(x, u) = reward[x, u] + discount * w[first[x, u]]``. The arithmetic (summation order,
+# one multiply-add per outcome from 0.0, then ``reward + discount * acc``) is that of the
+# row kernels above, so both paths give bit-identical numbers.
+
+
+@njit(parallel=True, **_OPTS)
+def ps_mark(succ, allowed, seen):  # pragma: no cover
+    """``seen[succ[x, u, 0]] = True`` for every allowed pair (benign same-value races)."""
+    n, n_act, _ = succ.shape
+    for x in prange(n):
+        for a in range(n_act):
+            if allowed[x, a]:
+                seen[succ[x, a, 0]] = True
+
+
+@njit(parallel=True, **_OPTS)
+def ps_fill(succ, allowed, post_id, outcomes, first):  # pragma: no cover
+    """``first[x, u] = post_id[y]`` (-1 if disallowed) and ``outcomes[post_id[y]] = succ[x, u]``.
+
+    Pairs with the same ``y`` but different tuples may race; :func:`ps_verify` then
+    rejects the form, whichever write won.
+    """
+    n, n_act, n_out = succ.shape
+    for x in prange(n):
+        for a in range(n_act):
+            if allowed[x, a]:
+                k = post_id[succ[x, a, 0]]
+                first[x, a] = k
+                for ll in range(n_out):
+                    outcomes[k, ll] = succ[x, a, ll]
+            else:
+                first[x, a] = -1
+
+
+@njit(parallel=True, **_OPTS)
+def ps_verify(succ, first, outcomes, nchunks):  # pragma: no cover
+    """Number of chunks holding an allowed pair whose tuple differs from its ``outcomes`` row."""
+    n, n_act, n_out = succ.shape
+    bad = np.zeros(nchunks, dtype=np.int64)
+    size = (n + nchunks - 1) // nchunks
+    for c in prange(nchunks):
+        start = c * size
+        end = min(n, start + size)
+        for x in range(start, end):
+            for a in range(n_act):
+                k = first[x, a]
+                if k < 0:
+                    continue
+                for ll in range(n_out):
+                    if outcomes[k, ll] != succ[x, a, ll]:
+                        bad[c] = 1
+                if bad[c]:
+                    break
+            if bad[c]:
+                break
+    return bad.sum()
+
+
+@njit(parallel=True, **_OPTS)
+def ps_expect(outcomes, probs, v, w):  # pragma: no cover
+    """``w[k] = sum_l probs[l] v[outcomes[k, l]]``: the expected next value after ``y_k``."""
+    n_post, n_out = outcomes.shape
+    for k in prange(n_post):
+        acc = 0.0
+        for ll in range(n_out):
+            acc += probs[ll] * v[outcomes[k, ll]]
+        w[k] = acc
+
+
+@njit(parallel=True, **_OPTS)
+def ps_max_stats(first, reward, w, discount, v, out, arg, nchunks):  # pragma: no cover
+    """``out[x] = max_u reward[x, u] + discount w[first[x, u]]``, first maximising action in
+    ``arg``; returns ``min`` and ``max`` of ``out - v``."""
+    n, n_act = first.shape
+    lo = np.full(nchunks, np.inf)
+    hi = np.full(nchunks, -np.inf)
+    size = (n + nchunks - 1) // nchunks
+    for c in prange(nchunks):
+        start = c * size
+        end = min(n, start + size)
+        lc = np.inf
+        hc = -np.inf
+        for i in range(start, end):
+            best = -np.inf
+            best_a = -1
+            for a in range(n_act):
+                k = first[i, a]
+                if k >= 0:
+                    q = reward[i, a] + discount * w[k]
+                    if q > best:
+                        best = q
+                        best_a = a
+            out[i] = best
+            arg[i] = best_a
+            d = best - v[i]
+            lc = min(lc, d)
+            hc = max(hc, d)
+        lo[c] = lc
+        hi[c] = hc
+    return lo.min(), hi.max()
+
+
+@njit(parallel=True, **_OPTS)
+def ps_policy_stats(first, reward, act, w, discount, v, out, nchunks):  # pragma: no cover
+    """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``; returns the
+    extremes of ``out - v``."""
+    n = first.shape[0]
+    lo = np.full(nchunks, np.inf)
+    hi = np.full(nchunks, -np.inf)
+    size = (n + nchunks - 1) // nchunks
+    for c in prange(nchunks):
+        start = c * size
+        end = min(n, start + size)
+        lc = np.inf
+        hc = -np.inf
+        for i in range(start, end):
+            a = act[i]
+            q = reward[i, a] + discount * w[first[i, a]]
+            out[i] = q
+            d = q - v[i]
+            lc = min(lc, d)
+            hc = max(hc, d)
+        lo[c] = lc
+        hi[c] = hc
+    return lo.min(), hi.max()
+
+
+@njit(parallel=True, **_OPTS)
+def ps_rows(allowed, row_start, act, out):  # pragma: no cover
+    """Row index (of :meth:`BellmanRows.from_mdp`) of the pair ``(x, act[x])``."""
+    n = act.shape[0]
+    for x in prange(n):
+        r = row_start[x]
+        for a in range(act[x]):
+            if allowed[x, a]:
+                r += 1
+        out[x] = r

@@ -21,6 +21,16 @@ Value iteration and MPI use the Porteus/MacQueen extrapolation: after a sweep
 is added to ``V'``. A constant shift does not change greedy policies and
 ``T(V + c) = T V + lambda c``, so the shift only removes the slowest (constant) error
 mode; the residual of the shifted vector is at most ``lambda * span(r) / 2``.
+
+Fast path
+---------
+Value iteration, MPI, iterative policy evaluation and :func:`bellman_residual` on a
+:class:`~lpbounds.mdp.FiniteMDP` first look for its post-decision form
+(:class:`~lpbounds.rows.PostDecisionRows`, verified on every pair, cached on the MDP):
+where it exists (the patrol model) a sweep reads far less memory and the exact rows are
+never built. Its arithmetic is that of the rows, so the results are the same numbers;
+``tests/test_fast_paths.py`` checks that. Pass the rows (``exact_rows(mdp)``) to force
+the plain path.
 """
 
 from __future__ import annotations
@@ -37,7 +47,7 @@ import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError, ValidationError
 from .mdp import FiniteMDP
-from .rows import BellmanRows
+from .rows import BellmanRows, PostDecisionRows
 from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
 
 __all__ = [
@@ -49,6 +59,7 @@ __all__ = [
     "exact_rows",
     "greedy_policy",
     "porteus_bounds",
+    "post_decision_rows",
     "solve_exact",
     "solve_game",
 ]
@@ -71,11 +82,30 @@ def exact_rows(model: Model) -> BellmanRows:
     return cached
 
 
-def _default_tol(rows: BellmanRows, tol: float | None) -> float:
+def post_decision_rows(model: Model) -> PostDecisionRows | None:
+    """The verified post-decision form of an MDP (cached on it), or ``None``.
+
+    ``None`` for row systems and for MDPs without the form (see
+    :class:`~lpbounds.rows.PostDecisionRows`).
+    """
+    if not isinstance(model, FiniteMDP):
+        return None
+    cached = model.__dict__.get("_post_decision")
+    if cached is None:
+        cached = PostDecisionRows.detect(model) or False
+        model.__dict__["_post_decision"] = cached
+    return cached or None
+
+
+def _default_tol(rows: BellmanRows | PostDecisionRows, tol: float | None) -> float:
     if tol is not None:
         if not (tol > 0 and np.isfinite(tol)):
             raise ValidationError(f"tol must be a positive number; got {tol}")
         return float(tol)
+    if isinstance(rows, PostDecisionRows):
+        # disallowed rewards are stored as 0, so this is max|R| over the allowed pairs,
+        # the same number as on the exact rows
+        return DP_RTOL * dp_scale(rows.reward_absmax, rows.discount)
     return DP_RTOL * dp_scale(float(np.abs(rows.reward).max(initial=0.0)), rows.discount)
 
 
@@ -233,12 +263,27 @@ def solve_exact(
     DPResult
     """
     t0 = time.perf_counter()
-    rows = exact_rows(model)
-    tol_ = _default_tol(rows, tol)
     if method not in ("mpi", "vi", "pi"):
         raise ValidationError(f"unknown method {method!r}; use 'mpi', 'vi' or 'pi'")
     if max_iter < 1 or eval_sweeps < 0:
         raise ValidationError("max_iter must be >= 1 and eval_sweeps >= 0")
+    fast = post_decision_rows(model) if method != "pi" else None
+    if fast is not None:
+        return _solve_post_decision(
+            model,
+            fast,
+            method,
+            tol,
+            max_iter,
+            eval_sweeps,
+            extrapolate,
+            initial,
+            callback,
+            raise_on_failure,
+            t0,
+        )
+    rows = exact_rows(model)
+    tol_ = _default_tol(rows, tol)
     v = np.zeros(rows.n_vars) if initial is None else rows._vec(initial).copy()
     if method == "pi":
         v, arg, res, its, sweeps, ok, hist = _policy_iteration(
@@ -270,8 +315,52 @@ def solve_exact(
     )
 
 
+def _solve_post_decision(
+    model: Model,
+    ps: PostDecisionRows,
+    method: str,
+    tol: float | None,
+    max_iter: int,
+    eval_sweeps: int,
+    extrapolate: bool,
+    initial: Any,
+    callback: Callback | None,
+    raise_on_failure: bool,
+    t0: float,
+) -> DPResult:
+    """:func:`solve_exact` (VI/MPI) on the post-decision form; same iteration, same numbers."""
+    tol_ = _default_tol(ps, tol)
+    if initial is None:
+        v = np.zeros(ps.n_vars)
+    else:
+        v = np.ascontiguousarray(initial, dtype=np.float64)
+        if v.shape != (ps.n_vars,):
+            raise ValidationError(f"expected a vector of length {ps.n_vars}; got {v.shape}")
+    m = eval_sweeps if method == "mpi" else 0
+    v, act, res, its, sweeps, ok, hist = _iterate(ps, v, tol_, max_iter, m, extrapolate, callback)
+    if not ok and raise_on_failure:
+        raise ConvergenceError(
+            f"{method} stopped after {its} iterations with residual {res:.3e} > tol {tol_:.3e}; "
+            "raise max_iter or tol"
+        )
+    return DPResult(
+        values=v,
+        policy=act.astype(np.int64),
+        policy_rows=ps.rows_of(act),
+        residual=res,
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), ps.discount),
+        tol=tol_,
+        iterations=its,
+        sweeps=sweeps,
+        seconds=time.perf_counter() - t0,
+        method=method,
+        converged=ok,
+        history=hist,
+    )
+
+
 def _iterate(
-    rows: BellmanRows,
+    rows: BellmanRows | PostDecisionRows,
     v: np.ndarray,
     tol: float,
     max_iter: int,
@@ -295,7 +384,10 @@ def _iterate(
     res = np.inf
     u = v.copy()
     buf = np.empty_like(u)
-    arg = np.zeros(rows.n_vars, dtype=np.int64)
+    if isinstance(rows, PostDecisionRows):
+        arg = rows.new_arg()  # actions, not rows
+    else:
+        arg = np.zeros(rows.n_vars, dtype=np.int64)
     c = 0.0
     for it in range(max_iter + 1):
         if game:
@@ -436,17 +528,7 @@ def _evaluate_rows(
         v = np.asarray(spla.spsolve(a, r_pi), dtype=np.float64)
         sweeps = 0
     elif method == "iterative":
-        v = np.zeros(rows.n_vars)
-        sweeps = 0
-        while True:
-            nv = rows.evaluate_rows(sel, v)
-            sweeps += 1
-            d = nv - v
-            lo, hi = float(d.min()), float(d.max())
-            if max(-lo, hi) <= tol or sweeps >= max_sweeps:
-                break
-            nv += lam / (1.0 - lam) * 0.5 * (lo + hi)
-            v = nv
+        v, sweeps = _evaluate_iterative(rows, sel, tol, max_sweeps)
     else:
         raise ValidationError(f"unknown evaluation {method!r}; use 'direct' or 'iterative'")
     res = float(np.abs(rows.evaluate_rows(sel, v) - v).max())
@@ -457,6 +539,66 @@ def _evaluate_rows(
         residual=res,
         error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), lam),
         method=method,
+        sweeps=sweeps,
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def _evaluate_iterative(
+    ops: BellmanRows | PostDecisionRows, sel: np.ndarray, tol: float, max_sweeps: int
+) -> tuple[np.ndarray, int]:
+    """Extrapolated evaluation sweeps of a fixed policy until the residual is <= ``tol``.
+
+    The Porteus shift is carried as a scalar offset as in :func:`_iterate`: the iterate
+    is ``u + c``; ``T_pi(u + c) - (u + c) = (T_pi u - u) - (1 - lambda) c``. ``sel`` is
+    rows (BellmanRows) or actions (PostDecisionRows).
+    """
+    lam = ops.discount
+    nchunks = max(1, 8 * numba.get_num_threads())
+    u = np.zeros(ops.n_vars)
+    buf = np.empty_like(u)
+    c = 0.0
+    sweeps = 0
+    while True:
+        lo, hi = ops._sweep_policy(sel, u, buf, nchunks)
+        sweeps += 1
+        lo -= (1.0 - lam) * c
+        hi -= (1.0 - lam) * c
+        if max(-lo, hi) <= tol or sweeps >= max_sweeps:
+            return u + c, sweeps
+        c = lam * c + lam / (1.0 - lam) * 0.5 * (lo + hi)
+        u, buf = buf, u
+
+
+def _evaluate_post_decision(
+    mdp: FiniteMDP, ps: PostDecisionRows, policy: Any, tol: float
+) -> PolicyEvaluation:
+    """Iterative policy evaluation on the post-decision form (actions, not rows)."""
+    t0 = time.perf_counter()
+    pol = np.asarray(policy)
+    if pol.shape != (ps.n_vars,) or not np.issubdtype(pol.dtype, np.integer):
+        raise ValidationError(f"a policy must be {ps.n_vars} integers; got {pol.shape} {pol.dtype}")
+    bad = (pol < 0) | (pol >= mdp.n_actions)
+    if bad.any():
+        x = int(np.flatnonzero(bad)[0])
+        raise ValidationError(f"policy[{x}] = {int(pol[x])} is not an action index")
+    ok = mdp.allowed[np.arange(ps.n_vars), pol]
+    if not ok.all():
+        x = int(np.flatnonzero(~ok)[0])
+        raise ValidationError(f"policy[{x}] = {int(pol[x])} is not allowed in state {x}")
+    act = pol.astype(np.int8)
+    v, sweeps = _evaluate_iterative(ps, act, tol, 1_000_000)
+    out = np.empty_like(v)
+    nchunks = max(1, 8 * numba.get_num_threads())
+    lo, hi = ps._sweep_policy(act, v, out, nchunks)  # measured on the returned vector
+    res = max(-lo, hi)
+    if res > tol:
+        raise ConvergenceError(f"policy evaluation stopped with residual {res:.3e} > {tol:.3e}")
+    return PolicyEvaluation(
+        values=v,
+        residual=res,
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), ps.discount),
+        method="iterative",
         sweeps=sweeps,
         seconds=time.perf_counter() - t0,
     )
@@ -486,6 +628,14 @@ def evaluate_policy(
     PolicyEvaluation
         ``residual = ||R_pi + lambda P_pi V - V||_inf`` measured on the result.
     """
+    if method not in ("auto", "direct", "iterative"):
+        raise ValidationError(f"unknown evaluation {method!r}; use 'direct' or 'iterative'")
+    if isinstance(model, FiniteMDP) and (
+        method == "iterative" or (method == "auto" and model.n_states > 200_000)
+    ):
+        ps = post_decision_rows(model)
+        if ps is not None:
+            return _evaluate_post_decision(model, ps, policy, _default_tol(ps, tol))
     rows = exact_rows(model)
     sel = _policy_rows(model, rows, policy)
     return _evaluate_rows(rows, sel, method, _default_tol(rows, tol))
@@ -505,6 +655,14 @@ def greedy_policy(model: Model, values: Any, tie_rtol: float = GREEDY_TIE_RTOL) 
 
 def bellman_residual(model: Model, values: Any) -> float:
     """``||T V - V||_inf``."""
+    ps = post_decision_rows(model)
+    if ps is not None:
+        v = np.ascontiguousarray(values, dtype=np.float64)
+        if v.shape != (ps.n_vars,):
+            raise ValidationError(f"expected a vector of length {ps.n_vars}; got {v.shape}")
+        out = np.empty_like(v)
+        lo, hi = ps._sweep_max(v, out, ps.new_arg(), max(1, 8 * numba.get_num_threads()))
+        return max(-lo, hi)
     rows = exact_rows(model)
     v = rows._vec(values)
     tv, _ = rows.apply_max(v)

@@ -46,6 +46,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -54,7 +55,7 @@ from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
 
-__all__ = ["BellmanRows"]
+__all__ = ["BellmanRows", "PostDecisionRows"]
 
 Reduce = Literal["max", "min"]
 
@@ -454,6 +455,129 @@ class BellmanRows:
         out = np.zeros(self.pair_row.shape)
         share = np.divide(vals, counts, out=np.zeros_like(vals), where=counts > 0)
         out[self.pair_tight] = share[tight_rows]
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class PostDecisionRows:
+    r"""The exact rows of an MDP in post-decision form: a fast path for structured models.
+
+    If the probabilities are shared and every allowed pair's outcome tuple is a function
+    of its first outcome, ``f(x, u, Y_l) = g(y, l)`` with ``y = f(x, u, Y_0)`` (the
+    *post-decision state*), then the exact Bellman operator factors as
+
+    .. math:: (Tv)(x) = \max_{u \in U_x} R_u(x) + \lambda W(f(x, u, Y_0)),
+              \qquad W(y) = \sum_l p_l\, v(g(y, l)),
+
+    so a sweep reads ``L`` values per distinct ``y`` and one ``W`` per pair instead of
+    ``L`` values per pair, and nothing is copied per row. The perimeter patrol MDP has
+    this form (an alert changes the delays of the state the vehicle moved to, whatever
+    the move). :meth:`detect` builds the form from a :class:`FiniteMDP` and checks it on
+    every allowed pair (it returns ``None`` where it does not hold). The kernels use
+    the arithmetic of the row kernels, so :func:`lpbounds.solve_exact` gives the same
+    numbers, bit for bit, as on :meth:`BellmanRows.from_mdp`'s rows.
+
+    Attributes
+    ----------
+    n_vars : int
+        States.
+    first : ndarray (n, A) int32
+        Index into ``outcomes`` of each allowed pair's post-decision state (-1: disallowed).
+    reward : ndarray (n, A)
+        ``R_u(x)`` (the MDP's array, not copied).
+    outcomes : ndarray (n_post, L)
+        ``g(y, l)`` per distinct post-decision state ``y``.
+    probs : ndarray (L,)
+    allowed : ndarray (n, A) bool
+    discount : float
+    """
+
+    n_vars: int
+    first: np.ndarray
+    reward: np.ndarray
+    outcomes: np.ndarray
+    probs: np.ndarray
+    allowed: np.ndarray
+    discount: float
+
+    @classmethod
+    def detect(cls, mdp: FiniteMDP) -> PostDecisionRows | None:
+        """The post-decision form of ``mdp``, or ``None`` if it does not have one.
+
+        Verified on every allowed pair: the form is returned only if each pair's full
+        outcome tuple equals the tuple stored for its first outcome.
+        """
+        if not mdp.shared_probabilities:
+            return None
+        n, n_act, n_out = mdp.successors.shape
+        if n_act > 127:
+            return None
+        succ, allowed = mdp.successors, mdp.allowed
+        seen = np.zeros(n, dtype=np.bool_)
+        _kernels.ps_mark(succ, allowed, seen)
+        post = np.flatnonzero(seen)
+        del seen
+        idt = index_dtype(max(n, post.size))
+        post_id = np.full(n, -1, dtype=idt)
+        post_id[post] = np.arange(post.size, dtype=idt)
+        outcomes = np.empty((post.size, n_out), dtype=succ.dtype)
+        first = np.empty((n, n_act), dtype=idt)
+        _kernels.ps_fill(succ, allowed, post_id, outcomes, first)
+        del post_id, post
+        nchunks = max(64, 8 * numba.get_num_threads())
+        if _kernels.ps_verify(succ, first, outcomes, nchunks) != 0:
+            return None
+        return cls(
+            n_vars=int(n),
+            first=first,
+            reward=mdp.rewards,
+            outcomes=outcomes,
+            probs=np.ascontiguousarray(mdp.probabilities, dtype=np.float64),
+            allowed=allowed,
+            discount=float(mdp.discount),
+        )
+
+    @property
+    def n_post(self) -> int:
+        """Number of distinct post-decision states."""
+        return int(self.outcomes.shape[0])
+
+    @property
+    def reward_absmax(self) -> float:
+        """``max |R_u(x)|`` over allowed pairs (disallowed rewards are stored as 0)."""
+        return float(np.abs(self.reward).max(initial=0.0))
+
+    def new_arg(self) -> np.ndarray:
+        """An array for the chosen action of every state (int8)."""
+        return np.zeros(self.n_vars, dtype=np.int8)
+
+    def _sweep_max(
+        self, v: np.ndarray, out: np.ndarray, arg: np.ndarray, nchunks: int
+    ) -> tuple[float, float]:
+        w = np.empty(self.n_post)
+        _kernels.ps_expect(self.outcomes, self.probs, v, w)
+        lo, hi = _kernels.ps_max_stats(
+            self.first, self.reward, w, self.discount, v, out, arg, nchunks
+        )
+        return float(lo), float(hi)
+
+    def _sweep_policy(
+        self, act: np.ndarray, v: np.ndarray, out: np.ndarray, nchunks: int
+    ) -> tuple[float, float]:
+        w = np.empty(self.n_post)
+        _kernels.ps_expect(self.outcomes, self.probs, v, w)
+        lo, hi = _kernels.ps_policy_stats(
+            self.first, self.reward, act, w, self.discount, v, out, nchunks
+        )
+        return float(lo), float(hi)
+
+    def rows_of(self, act: np.ndarray) -> np.ndarray:
+        """Row indices (those of :meth:`BellmanRows.from_mdp`) of the pairs ``(x, act[x])``."""
+        counts = self.allowed.sum(axis=1)
+        row_start = np.zeros(self.n_vars, dtype=np.int64)
+        np.cumsum(counts[:-1], out=row_start[1:])
+        out = np.empty(self.n_vars, dtype=np.int64)
+        _kernels.ps_rows(self.allowed, row_start, np.asarray(act), out)
         return out
 
 
