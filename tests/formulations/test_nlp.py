@@ -8,6 +8,8 @@ from exact DP (policy iteration of :func:`lpbounds.dp.solve_exact`).
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -79,7 +81,8 @@ def test_exact_methods_agree_with_reference_and_bound_v_star(spec):
     nlp = NLP(mdp, part)
     ref = reference_w(mdp, part)
     tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
-    results = {m: nlp.solve(m) for m in ("fixed-point", "strategy-iteration", "milp")}
+    methods = ("fixed-point", "strategy-iteration") + (("milp",) if spec[0] <= 20 else ())
+    results = {m: nlp.solve(m) for m in methods}
     for method, r in results.items():
         err = np.abs(r.values - ref).max()
         assert err <= tol, f"{method}: max|w - w_ref| = {err:.2e} > {tol:.1e}"
@@ -103,14 +106,14 @@ def test_strategy_iteration_upper_bounds_decrease():
     mdp, part = instance(30, 3, 3, 6, 3)
     r = NLP(mdp, part).solve("strategy-iteration")
     ups = [e.upper for e in r.log]
-    assert all(b <= a + 1e-12 * max(1.0, abs(a)) for a, b in zip(ups, ups[1:], strict=False)), (
+    assert all(b <= a + 1e-12 * max(1.0, abs(a)) for a, b in itertools.pairwise(ups)), (
         f"strategy-iteration upper bounds increased: {ups}"
     )
 
 
 def test_cost_independence():
     """w* is the least element (Fact 2): every c > 0 gives the same minimiser."""
-    mdp, part = instance(20, 2, 3, 5, 2)
+    mdp, part = instance(10, 2, 2, 3, 1)
     ref = reference_w(mdp, part)
     rng = np.random.default_rng(7)
     tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
@@ -148,18 +151,31 @@ def _check_bracket_every_round(nlp, r, ref):
 
 
 @pytest.mark.parametrize(
-    "spec", [(8, 2, 2, 3, 0), (10, 2, 2, 3, 1), (15, 2, 2, 4, 0)], ids=lambda s: f"n{s[0]}-s{s[4]}"
+    "spec", [(8, 2, 2, 3, 0), (10, 2, 2, 3, 1)], ids=lambda s: f"n{s[0]}-s{s[4]}"
 )
 def test_cutting_planes_bracket_valid_every_round_and_closes(spec):
     mdp, part = instance(*spec)
     nlp = NLP(mdp, part)
     ref = reference_w(mdp, part)
-    r = nlp.solve("cutting-planes", max_iter=120)
+    r = nlp.solve("cutting-planes", max_iter=60)
     _check_bracket_every_round(nlp, r, ref)
     assert r.converged, f"expected convergence on this instance: {r.summary()}"
     assert r.gap <= r.gap_rtol * max(1.0, abs(r.upper_bound)), r.summary()
     assert r.cuts == sum(e.cuts_added for e in r.log)
     assert r.iterations == len(r.log)
+
+
+@pytest.mark.parametrize("spec", [(15, 2, 2, 4, 0), (20, 3, 3, 5, 5)], ids=["n15-s0", "n20-s5"])
+def test_cutting_planes_bracket_valid_on_harder_instances(spec):
+    """25 rounds of 10 cuts on instances that need ~80-130 rounds: every cut stays valid."""
+    mdp, part = instance(*spec)
+    nlp = NLP(mdp, part)
+    r = nlp.solve("cutting-planes", max_iter=25)
+    assert r.cuts > 25, f"expected many cuts; got {r.cuts}"
+    _check_bracket_every_round(nlp, r, reference_w(mdp, part))
+    # the lower bound never decreases (cuts only shrink the master)
+    lows = [e.lower for e in r.log]
+    assert all(b >= a for a, b in itertools.pairwise(lows)), lows
 
 
 def test_cutting_planes_stall_is_reported():
@@ -261,7 +277,7 @@ def test_bad_input_errors():
 )
 def test_property_game_fixed_point_equals_milp(n, a, l_out, m_frac, seed, discount):
     mdp = garnet(n, a, l_out, discount, seed=seed, reward_range=(-1.0, 2.0))
-    m = max(1, int(round(m_frac * n)))
+    m = max(1, round(m_frac * n))
     part = random_partition(n, m, seed=seed + 1)
     nlp = NLP(mdp, part)
     ref = reference_w(mdp, part)
