@@ -191,3 +191,26 @@ def test_eight_stations_without_enumerating_states():
     rows = patrol_rows(p, "lower")
     assert rows.n_vars == p.n_partitions == 207_928
     assert rows.n_rows == 2 * p.n_partitions + int((np.diff(rows.indptr) == 3).sum())
+
+
+def test_bounds_command_on_the_small_instance(tmp_path):
+    from lpbounds.cli.main import main
+
+    out = tmp_path / "b.json"
+    assert main(["bounds", "models/patrol-small.toml", "--json", str(out)]) == 0
+    import json
+
+    res = json.loads(out.read_text())
+    p = PatrolParams(N=6, stations=(0, 3), D=2, Gamma=4)
+    assert (res["n_states"], res["n_partitions"]) == (320, 176)
+    # independent: RLP and NLP optima from the full MDP's aggregated rows
+    model = PatrolModel(p)
+    mdp, part = model.mdp(), model.partition()
+    rlp = solve_exact(BellmanRows.aggregate(mdp, part, "max"), tol=DP_TOL).values
+    nlp = solve_game(BellmanRows.aggregate(mdp, part, "min"), tol=DP_TOL).values
+    gap = rlp - nlp
+    # the command's fixed points use the default DP tolerance (1e-10 x value scale)
+    assert res["gap"]["max"] == pytest.approx(gap.max(), abs=1e-9)
+    assert res["gap"]["min"] == pytest.approx(gap.min(), abs=1e-9)
+    assert res["UBLP"]["lp"]["agrees"] and res["LBLP"]["lp"]["agrees"]
+    assert res["lemma3"]["pairs_differing"] == 4  # 2 stations x 2 directions, taubar = 4
