@@ -31,8 +31,11 @@ def _fmt(x: Any, digits: int = 4) -> str:
 
 def markdown_table(header: list[str], rows: list[list[Any]]) -> str:
     """A GitHub-flavoured markdown table."""
-    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    out += ["| " + " | ".join(_fmt(c) for c in r) + " |" for r in rows]
+    out = [
+        "| " + " | ".join(h.replace("|", "\\|") for h in header) + " |",
+        "|" + "|".join("---" for _ in header) + "|",
+    ]
+    out += ["| " + " | ".join(_fmt(c).replace("|", "\\|") for c in r) + " |" for r in rows]
     return "\n".join(out)
 
 
@@ -246,13 +249,19 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
             "specification). A state with a new alert at station j (tau_j = 1 instead of 0) "
             "therefore has *more* admissible controls — the UAV may loiter at j and collect "
             "the information reward — so its value can be higher, although its delay "
-            "penalty is not lower. Every violation above has tau_j(x2) = 0; among pairs with "
-            "the same alert status (where the admissible controls along every trajectory "
-            "agree) there are "
-            f"{cl['violations_same_alert_status']} violations, so the claim — and the "
-            "partition-level claim, whose pairs keep A fixed — holds where its proof "
-            "applies. With `allow_empty_loiter = true` (the paper's literal text) the "
-            "admissible controls never depend on the delays.\n"
+            "penalty is not lower; and a new alert at another station gives the same extra "
+            "option a few steps later. "
+            + (
+                "Every violation above has tau_j(x2) = 0; among pairs with the same alert "
+                "status (where the admissible controls along every trajectory agree) there "
+                "are none, so the claim — and the partition-level claim, whose pairs keep A "
+                "fixed — holds where its proof applies. "
+                if cl["violations_same_alert_status"] == 0
+                else f"**{cl['violations_same_alert_status']} violations have the same alert "
+                "status: the explanation above does not cover them.** "
+            )
+            + "With `allow_empty_loiter = true` (the paper's literal text) the admissible "
+            "controls never depend on the delays.\n"
         )
         ex = cl["examples"][:5]
         if ex:

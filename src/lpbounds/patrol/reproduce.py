@@ -74,9 +74,12 @@ PAPER_TABLE1 = {
     "pi_s": {"mean_loiters": 4.7, "mean_delay": 5.6, "worst_delay": 18},
 }
 #: Options per cvxpy solver for UBLP/LBLP. HiGHS's interior point method with crossover
-#: (a vertex solution, as simplex gives) is 2-3x faster than its default dual simplex on
-#: these MDP LPs (measured on the paper's instance: 5.6 s vs 17 s on a loaded machine).
-SOLVER_OPTIONS: dict[str, dict[str, Any]] = {"HIGHS": {"highs_options": {"solver": "ipm"}}}
+#: (a vertex solution, as simplex gives), on one thread, is 5-7x faster than its default
+#: (dual simplex, parallel) on these MDP LPs: UBLP of the paper's instance took 2.3 s
+#: against 17 s (5.6 s for IPM on the default threads) on a shared, loaded 2-core machine.
+SOLVER_OPTIONS: dict[str, dict[str, Any]] = {
+    "HIGHS": {"highs_options": {"solver": "ipm", "threads": 1}}
+}
 #: Paper, Section 5: the example's counts.
 PAPER_COUNTS = {"n_states": 2_048_000, "n_partitions": 8_900}
 
