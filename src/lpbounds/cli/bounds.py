@@ -2,8 +2,11 @@
 
 Computes, from the ``M`` partitions alone (:mod:`lpbounds.patrol.bounds`):
 
-* UBLP (Theorem 4) and LBLP (Theorem 3): each as a solver-free fixed point and, unless
-  ``--no-lp``, as an LP with cvxpy (``--solver``), cross-checked against the fixed point;
+* UBLP (Theorem 4) and LBLP (Theorem 3): each as a solver-free fixed point (its exact LP
+  optimum, Fact 1 in :mod:`lpbounds.rows`) and as an LP with cvxpy (``--solver``),
+  cross-checked against the fixed point. The LP is solved by default up to
+  ``--lp-max-partitions`` partitions (50,000: the paper's M = 8,900 takes seconds, the
+  8-station M = 207,928 takes HiGHS many minutes); ``--lp`` forces it, ``--no-lp`` skips it;
 * the policy-free gap ``v*(i) - w*(i)`` per partition: for every state ``x`` of ``S_i``,
   ``w*(i) <= V*(x) <= v*(i)``, so the gap bounds how far either bound is from ``V*``;
 * Lemma 3's ``|T(i, u)|`` against the construction (where the Gamma cap changes it).
@@ -21,7 +24,7 @@ import numpy as np
 from rich.table import Table
 
 from ..dp import solve_exact
-from ..errors import SolverError
+from ..errors import SolverError, ValidationError
 from ..instances import load_instance
 from ..tolerances import LP_COMPARE_RTOL
 from ._common import add_model_argument, console, progress
@@ -37,6 +40,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     add_model_argument(p, default="patrol-paper")
     p.add_argument("--solver", default="HIGHS", help="LP solver (HIGHS, CLARABEL, ...)")
     p.add_argument("--no-lp", action="store_true", help="fixed points only (no LP solve)")
+    p.add_argument("--lp", action="store_true", help="solve the LPs whatever the size")
+    p.add_argument(
+        "--lp-max-partitions",
+        type=int,
+        default=50_000,
+        help="above this M the LPs are skipped unless --lp (default 50,000)",
+    )
     p.add_argument("--json", metavar="PATH", help="also write the results as JSON")
     p.set_defaults(func=run)
 
@@ -60,6 +70,15 @@ def run(args: argparse.Namespace) -> int:
     }
     times: dict[str, float] = {}
     t_all = time.perf_counter()
+    if args.lp and args.no_lp:
+        raise ValidationError("--lp and --no-lp contradict each other")
+    args.no_lp = args.no_lp or (not args.lp and params.n_partitions > args.lp_max_partitions)
+    out["lp_solved"] = not args.no_lp
+    if args.no_lp and not args.lp:
+        out["lp_note"] = (
+            f"LP not solved (M = {params.n_partitions} > --lp-max-partitions "
+            f"{args.lp_max_partitions}, or --no-lp): the fixed points are the LPs' exact optima"
+        )
     with progress() as prog:
         steps = 4 + (0 if args.no_lp else 2)
         task = prog.add_task(f"bounds of {inst.name}", total=steps, status="")
@@ -183,6 +202,8 @@ def _print(out: dict[str, Any], params: Any) -> None:
     )
     t.add_row("time (s)", ", ".join(f"{k} {v:.2f}" for k, v in out["seconds"].items()))
     t.add_row("peak memory", f"{out['peak_rss_mb']:.0f} MB")
+    if "lp_note" in out:
+        t.add_row("LP", out["lp_note"])
     console.print(t)
     w = Table(title=f"largest gaps v* - w* (of {out['n_partitions']:,} partitions)")
     for col in ("partition", "l", "w", "d", "A", "taubar", "lower w*", "upper v*", "gap"):
