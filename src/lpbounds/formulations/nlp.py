@@ -343,6 +343,7 @@ class NLP:
         backend: str = "highspy",
         time_limit: float | None = None,
         cglp_rows: str = "all",
+        normalization: str = "multipliers",
         progress: bool = False,
         raise_on_failure: bool = False,
         **solver_options: Any,
@@ -373,6 +374,9 @@ class NLP:
             Cutting planes: the master rows the cut-generating LP is built on (all of
             them, or the single-term rows and the cuts binding at the master's point:
             smaller CGLPs, weaker cuts).
+        normalization : {"multipliers", "alpha"}
+            Cutting planes: the CGLP's normalisation, ``sum(u) + sum(v) = 1`` (default)
+            or ``max|alpha| <= 1`` (see :func:`~lpbounds.formulations.nlp_cuts.cglp_data`).
         progress : bool
             Show a rich progress bar (on stderr) with the bracket.
         raise_on_failure : bool
@@ -402,6 +406,7 @@ class NLP:
                     backend,
                     time_limit,
                     cglp_rows,
+                    normalization,
                     tick,
                     solver_options,
                 )
@@ -603,6 +608,7 @@ class NLP:
         backend: str,
         time_limit: float | None,
         cglp_rows: str,
+        normalization: str,
         tick: Callable[..., None],
         options: dict[str, Any],
     ) -> NLPResult:
@@ -617,6 +623,7 @@ class NLP:
             cuts_per_round=cuts_per_round,
             time_limit=time_limit,
             cglp_rows=cglp_rows,
+            normalization=normalization,
             on_round=tick,
             **options,
         )

@@ -70,7 +70,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SolverError, ValidationError
-from ..tolerances import NLP_CUT_MIN_DEPTH_RTOL, NLP_CUT_SAFETY_RTOL, NLP_VIOLATION_RTOL
+from ..tolerances import (
+    NLP_CUT_MIN_DEPTH_RTOL,
+    NLP_CUT_SAFETY_RTOL,
+    NLP_HIGHS_FEAS_TOL,
+    NLP_VIOLATION_RTOL,
+)
 from .base import Formulation, resolve_solver
 
 if TYPE_CHECKING:
@@ -88,6 +93,8 @@ __all__ = [
 ]
 
 INF = np.inf
+#: The CGLP normalisations (see :func:`cglp_data`).
+NORMALIZATIONS: tuple[str, ...] = ("multipliers", "alpha")
 
 
 # ---------------------------------------------------------------------- LP data
@@ -155,6 +162,8 @@ def _highs() -> Any:
     # the loop's LPs are small and solved thousands of times: presolve costs more than
     # it saves (measured on a 250-cut master: 5x on the joint term LP, 2x on the CGLP)
     h.setOptionValue("presolve", "off")
+    h.setOptionValue("primal_feasibility_tolerance", NLP_HIGHS_FEAS_TOL)
+    h.setOptionValue("dual_feasibility_tolerance", NLP_HIGHS_FEAS_TOL)
     return h
 
 
@@ -268,12 +277,20 @@ def cglp_data(
     hi: np.ndarray,
     a_terms: sp.csr_matrix,
     b_terms: np.ndarray,
+    normalization: str = "multipliers",
 ) -> LPData:
     """The lift-and-project CGLP (module docstring) in variables ``[alpha, beta, (u_t, v_t)_t]``.
 
     The master polyhedron is ``Gf w >= hf`` with ``Gf = [G; I; -I]``, ``hf = [h; lo; -hi]``.
-    Built directly in COO form (vectorised over the terms).
+    ``normalization="multipliers"``: ``sum_t (1'u_t + v_t) = 1``; ``"alpha"``: ``-1 <=
+    alpha <= 1`` instead (the optimum is then the violation of the cut in the units of
+    ``max|alpha| = 1``, the scale in which the cut is used). Built directly in COO form
+    (vectorised over the terms).
     """
+    if normalization not in NORMALIZATIONS:
+        raise ValidationError(
+            f"normalization must be one of {NORMALIZATIONS}; got {normalization!r}"
+        )
     m_vars = G.shape[1]
     n_terms = a_terms.shape[0]
     eye = sp.identity(m_vars, format="csr")
@@ -322,7 +339,7 @@ def cglp_data(
     c = np.zeros(n_cols)
     c[:m_vars] = wbar
     c[m_vars] = -1.0
-    return LPData(
+    data = LPData(
         c=c,
         A=a,
         row_lo=np.r_[np.zeros(n_eq), np.zeros(n_terms), 1.0],
@@ -330,6 +347,12 @@ def cglp_data(
         col_lo=np.r_[np.full(m_vars + 1, -INF), np.zeros(n_terms * n_mult)],
         col_hi=np.full(n_cols, INF),
     )
+    if normalization == "alpha":
+        data.A = data.A[:-1]
+        data.row_lo, data.row_hi = data.row_lo[:-1], data.row_hi[:-1]
+        data.col_lo[:m_vars] = -1.0
+        data.col_hi[:m_vars] = 1.0
+    return data
 
 
 def term_lps_data(
@@ -537,6 +560,7 @@ def cutting_planes(
     cuts_per_round: int = 10,
     time_limit: float | None = None,
     cglp_rows: str = "all",
+    normalization: str = "multipliers",
     on_round: Callable[[NLPIteration], None] | None = None,
     **options: Any,
 ) -> CutLoopOutput:
@@ -545,6 +569,10 @@ def cutting_planes(
 
     if max_rounds < 1:
         raise ValidationError(f"max_rounds must be >= 1; got {max_rounds}")
+    if normalization not in NORMALIZATIONS:
+        raise ValidationError(
+            f"normalization must be one of {NORMALIZATIONS}; got {normalization!r}"
+        )
     if cglp_rows not in ("all", "binding"):
         raise ValidationError(f"cglp_rows must be 'all' or 'binding'; got {cglp_rows!r}")
     if cuts_per_round < 1:
@@ -616,7 +644,9 @@ def cutting_planes(
             for d in cand:
                 sl = slice(starts[d], starts[d + 1])
                 at, bt = a_all[sl], b_all[sl]
-                cg = be.solve(cglp_data(wbar, gk, hk, lo, hi, at, bt), CutGeneratingLP)
+                cg = be.solve(
+                    cglp_data(wbar, gk, hk, lo, hi, at, bt, normalization), CutGeneratingLP
+                )
                 if cg.status != "optimal" or not cg.objective < 0:
                     continue
                 alpha = cg.x[:m].copy()
