@@ -431,10 +431,19 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
     add("## Times and memory\n")
     secs = s.get("seconds", {})
     rss = s.get("peak_rss_mb", {})
+    cpu = s.get("cpu_seconds", {})
     add(
         markdown_table(
-            ["step", "seconds", "peak RSS after the step (MB)"],
-            [[k, round(x, 3), round(rss.get(k, float("nan")))] for k, x in secs.items()],
+            ["step", "wall seconds", "CPU seconds (all threads)", "peak RSS after (MB)"],
+            [
+                [
+                    k,
+                    round(x, 3),
+                    round(cpu.get(k, float("nan")), 3),
+                    round(rss.get(k, float("nan"))),
+                ]
+                for k, x in secs.items()
+            ],
         )
     )
     add("")
