@@ -138,3 +138,43 @@ def test_cli_unknown_solver(tiny_model, capsys):
     rc = main(["verify", tiny_model, "--random", "0", "--solvers", "NOPE"])
     assert rc == 1
     assert "unknown solver" in capsys.readouterr().err
+
+
+def test_summarize_keeps_the_worst_record():
+    recs = [
+        {
+            "check": "Theorem 1",
+            "solver": "HIGHS",
+            "max_deviation": 1e-9,
+            "tolerance": 1e-6,
+            "pass": True,
+        },
+        {
+            "check": "Theorem 1",
+            "solver": "HIGHS",
+            "max_deviation": 2e-6,
+            "tolerance": 1e-6,
+            "pass": False,
+        },
+        {
+            "check": "Remark 2",
+            "solver": "HIGHS",
+            "max_deviation": 0.5,
+            "tolerance": 1e-6,
+            "pass": True,
+        },
+        {
+            "check": "Remark 2",
+            "solver": "HIGHS",
+            "max_deviation": 0.1,
+            "tolerance": 1e-6,
+            "pass": True,
+        },
+    ]
+    rows = verify.summarize(recs)
+    assert [(r["check"], r["records"], r["passed"]) for r in rows] == [
+        ("Theorem 1", 2, 1),
+        ("Remark 2", 2, 2),
+    ]
+    assert rows[0]["max_deviation"] == 2e-6, "the worst ratio, not the first record"
+    assert rows[1]["max_deviation"] == 0.1, "Remark 2: the smallest shown difference"

@@ -83,6 +83,7 @@ __all__ = [
     "model_instances",
     "random_instances",
     "run_verification",
+    "summarize",
     "verify_instance",
     "verify_remark2",
 ]
@@ -555,6 +556,41 @@ def run_verification(
         progress("Remark 2")
     records += verify_remark2(solver_names, seed=seed, rtol=rtol)
     return records, skipped
+
+
+def summarize(records: Sequence[Record]) -> list[Record]:
+    """One row per (check, solver): records, passed, worst ``max_deviation / tolerance``.
+
+    Each row has ``check``, ``solver``, ``records``, ``passed``, ``max_deviation`` and
+    ``tolerance`` of the record with the largest ratio (for "Remark 2": the smallest,
+    since there the deviation must exceed the tolerance).
+    """
+    groups: dict[tuple[str, str], list[Record]] = {}
+    for r in records:
+        groups.setdefault((r["check"], r["solver"]), []).append(r)
+    order = ["Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2", "Remark 2"]
+    out = []
+    for (check, solver), recs in sorted(
+        groups.items(),
+        key=lambda kv: (order.index(kv[0][0]) if kv[0][0] in order else 99, kv[0][1]),
+    ):
+
+        def ratio(r: Record) -> float:
+            tol = r["tolerance"]
+            return r["max_deviation"] / tol if tol and np.isfinite(tol) else np.inf
+
+        pick = min(recs, key=ratio) if check == "Remark 2" else max(recs, key=ratio)
+        out.append(
+            {
+                "check": check,
+                "solver": solver,
+                "records": len(recs),
+                "passed": sum(bool(r["pass"]) for r in recs),
+                "max_deviation": pick["max_deviation"],
+                "tolerance": pick["tolerance"],
+            }
+        )
+    return out
 
 
 def write_json(records: list[Record], path: str | Path) -> None:

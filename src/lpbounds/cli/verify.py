@@ -13,6 +13,7 @@ from ..verify import (
     default_solvers,
     model_instances,
     random_instances,
+    summarize,
     verify_instance,
     verify_remark2,
     write_json,
@@ -106,6 +107,19 @@ def run(args: argparse.Namespace) -> int:
     # a file or pipe gets full-width lines instead of 80 columns of wrapped details
     out = console if console.is_terminal else Console(width=220)
     out.print(table)
+    summary = Table(title="summary: the worst record of each check and solver")
+    for col in ("check", "solver", "passed", "worst deviation", "its tolerance"):
+        summary.add_column(col, justify="left" if col in ("check", "solver") else "right")
+    for row in summarize(records):
+        ok = row["passed"] == row["records"]
+        summary.add_row(
+            row["check"],
+            row["solver"],
+            f"{'[green]' if ok else '[bold red]'}{row['passed']}/{row['records']}[/]",
+            f"{row['max_deviation']:.2e}",
+            f"{row['tolerance']:.2e}",
+        )
+    out.print(summary)
     if skipped:
         out.print(
             f"skipped (more than {args.max_states} states or size unknown; name one to "
