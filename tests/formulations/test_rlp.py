@@ -1,0 +1,74 @@
+"""RLP (eq. 9) and ELP (eq. 8): Theorem 1 on random MDPs, result statuses, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import lpbounds as lb
+from lpbounds.errors import SolverError, ValidationError
+from lpbounds.formulations import ELP, RLP
+
+from ..conftest import reference_solve
+from ._reference import rlp_reference
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    n=st.integers(2, 30),
+    n_act=st.integers(1, 3),
+    seed=st.integers(0, 10_000),
+    data=st.data(),
+)
+def test_theorem_1_on_random_mdps_and_costs(n, n_act, seed, data):
+    """The optimum is v* wherever c-bar > 0 and dominates v* everywhere, for any c >= 0."""
+    m = data.draw(st.integers(1, n))
+    solver = data.draw(st.sampled_from(["HIGHS", "CLARABEL"]))
+    mdp = lb.garnet(n, n_act, 3, 0.9, seed=seed, reward_range=(-2.0, 1.0), allowed_fraction=0.8)
+    part = lb.random_partition(n, m, seed=seed)
+    rng = np.random.default_rng(seed)
+    cost = rng.uniform(0, 1, n) * (rng.random(n) < 0.6)
+    if not cost.any():
+        cost[0] = 1.0
+    vref = rlp_reference(mdp, part)
+    tol = 1e-6 * max(1.0, np.abs(vref).max())
+    res = RLP(mdp, part, cost).solve(solver)
+    cbar = np.bincount(part.labels, weights=cost, minlength=m)
+    assert (res.values - vref).min() >= -tol, "a feasible point below v*"
+    assert np.abs(res.values - vref)[cbar > 0].max(initial=0) <= tol, "optimum != v* on c > 0"
+    assert (res.state_values - reference_solve(mdp)).min() >= -tol, "Phi v* must be >= V*"
+
+
+def test_residual_and_status_are_checked_by_lpbounds():
+    mdp = lb.garnet(20, 2, 2, 0.9, seed=1)
+    form = ELP(mdp)
+    res = form.solve("SCS", residual_rtol=1e-14, raise_on_failure=False)
+    assert res.status.value == "residual_too_large", "SCS's 1e-4 point must not pass 1e-14"
+    assert res.primal_residual > res.residual_tol
+    assert res.primal_residual == pytest.approx(max(0.0, (form.b - form.A @ res.x).max()))
+    with pytest.raises(SolverError, match="residual"):
+        form.solve("SCS", residual_rtol=1e-14)
+    ok = form.solve("HIGHS")
+    assert ok.ok and ok.primal_residual <= ok.residual_tol
+    assert ok.compile_seconds >= 0 and ok.solve_seconds >= 0 and ok.solver == "HIGHS"
+
+
+def test_bad_input():
+    mdp = lb.garnet(6, 2, 2, seed=1)
+    part = lb.random_partition(6, 2)
+    with pytest.raises(ValidationError, match="negative"):
+        RLP(mdp, part, cost=[1, 1, 1, -1, 1, 1])
+    with pytest.raises(ValidationError, match="length 6"):
+        RLP(mdp, part, cost=[1, 1])
+    with pytest.raises(ValidationError, match="not both"):
+        RLP(mdp, part, cost=np.ones(6), partition_cost=np.ones(2))
+    with pytest.raises(ValidationError, match="partition_cost"):
+        RLP(mdp, part, partition_cost=np.ones(3))
+    with pytest.raises(ValidationError, match="states"):
+        RLP(mdp, lb.random_partition(7, 2))
+    with pytest.raises(ValidationError, match="negative"):
+        ELP(mdp, cost=-np.ones(6))
+    with pytest.raises(ValidationError, match="finite"):
+        ELP(mdp, cost=np.full(6, np.inf))
