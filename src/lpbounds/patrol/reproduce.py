@@ -666,7 +666,7 @@ def reproduce(
         for s in seeds:
             y = alert_sequence(n_steps, p0, params.m, s)
             for key, pol in (("pi_star", pi_star), ("pi_s", pi_s)):
-                r = simulate(pm, pol, y, policy_name=key, seed=s)
+                r = simulate(pm, pol, y, policy_name=key, seed=s, components=comps)
                 if r.mismatches:
                     raise AssertionError(
                         f"simulation of {key} (seed {s}): the model's successor disagrees "

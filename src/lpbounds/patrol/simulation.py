@@ -331,6 +331,7 @@ def simulate(
     policy_name: str = "policy",
     seed: int | None = None,
     check: bool = True,
+    components: Any = None,
 ) -> SimulationResult:
     """Simulate the patrol under ``policy`` for ``len(outcomes)`` steps.
 
@@ -347,6 +348,9 @@ def simulate(
         Initial state; default ``l = 0, w = +1, d = 0``, no alert.
     check : bool
         Check every step against :func:`spec_step`'s dynamics (cheap; default on).
+    components : array (n_states, 3 + m), optional
+        ``model.state_components()`` if already at hand (building it costs more than
+        simulating 60,000 steps on the paper's instance).
 
     Raises
     ------
@@ -368,7 +372,9 @@ def simulate(
     m = len(params.stations)
     if y.ndim != 1 or y.size == 0 or y.min() < 0 or y.max() > m:
         raise ValidationError(f"outcomes must be a non-empty 1-d array of 0..{m}")
-    comps = np.ascontiguousarray(model.state_components())
+    comps = np.ascontiguousarray(model.state_components() if components is None else components)
+    if comps.shape != (n, 3 + m):
+        raise ValidationError(f"state components must have shape {(n, 3 + m)}; got {comps.shape}")
     if not np.issubdtype(comps.dtype, np.integer):
         raise ValidationError(f"state components must be integers; got {comps.dtype}")
     if start is None:
