@@ -264,6 +264,11 @@ def test_invalid_policy_rejected(spec):
         simulate(spec, pol, np.zeros(5, dtype=np.int64))
     with pytest.raises(ValidationError):
         simulate(spec, np.zeros(3, dtype=np.int64), np.zeros(5, dtype=np.int64))
+    ok = np.zeros(spec.mdp().n_states, dtype=np.int64)
+    with pytest.raises(ValidationError, match="state components"):
+        simulate(spec, ok, np.zeros(5, dtype=np.int64), components=np.zeros((3, 5), int))
+    with pytest.raises(ValidationError, match="outcomes"):
+        simulate(spec, ok, np.array([0, 9]))
 
 
 def _exact_expectations(model, policy, start, n_steps):
