@@ -163,7 +163,7 @@ def bench_cvxpy_vs_highspy(n_states: int, n_part: int) -> list[str]:
     form = RLP(mdp, part)
     opts = {"solver": "ipm"}
     t0 = time.perf_counter()
-    res = form.solve("HIGHS", **opts)
+    res = form.solve("HIGHS", highs_options=dict(opts))
     t_cvx = time.perf_counter() - t0
     t_direct, status, obj = highspy_solve(form.A, form.b, form.c, 600.0, **opts)
     ratio = t_cvx / t_direct
@@ -172,7 +172,7 @@ def bench_cvxpy_vs_highspy(n_states: int, n_part: int) -> list[str]:
         f"### 2. RLP through cvxpy vs highspy directly ({n_states:,} x 3 x 5, "
         f"{n_part:,} partitions, {form.A.shape[0]:,} rows, HiGHS IPM + crossover)",
         "",
-        f"- cvxpy `RLP.solve('HIGHS', solver='ipm')`: {t_cvx:.2f} s wall "
+        f"- cvxpy `RLP.solve('HIGHS', highs_options={{'solver': 'ipm'}})`: {t_cvx:.2f} s wall "
         f"(compile {res.compile_seconds:.2f} s, HiGHS {res.solve_seconds:.2f} s), "
         f"objective {res.objective:.10g}",
         f"- highspy on the same (A, b, c): {t_direct:.2f} s wall (incl. passModel), "

@@ -72,3 +72,12 @@ def test_bad_input():
         ELP(mdp, cost=-np.ones(6))
     with pytest.raises(ValidationError, match="finite"):
         ELP(mdp, cost=np.full(6, np.inf))
+
+
+def test_highs_interior_point_with_crossover_through_highs_options():
+    mdp = lb.garnet(40, 3, 3, 0.9, seed=2)
+    part = lb.random_partition(40, 5, seed=2)
+    res = RLP(mdp, part).solve("HIGHS", highs_options={"solver": "ipm", "run_crossover": "on"})
+    vref = rlp_reference(mdp, part)
+    assert np.abs(res.values - vref).max() <= 1e-6 * max(1.0, np.abs(vref).max())
+    assert res.solver_options == {"highs_options": {"solver": "ipm", "run_crossover": "on"}}

@@ -281,8 +281,10 @@ class Formulation:
         verbose : bool
             Print the solver's log.
         **solver_options
-            Passed to the solver through cvxpy, e.g. ``solver="ipm",
-            run_crossover="on"`` for HiGHS' interior point method with crossover.
+            Passed to the solver through cvxpy. HiGHS' own ``solver`` option clashes
+            with this method's ``solver`` argument, so HiGHS options go in a dict:
+            ``highs_options={"solver": "ipm", "run_crossover": "on"}`` for its interior
+            point method with crossover (faster than its simplex on large RLPs).
 
         Returns
         -------
