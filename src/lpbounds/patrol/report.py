@@ -351,7 +351,8 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
     )
     add(
         f"pi_s differs from pi* on {po['differs_states']:,} states "
-        f"({100 * po['differs_fraction']:.2f} %); its action loses more than "
+        f"({100 * po['differs_fraction']:.2f} %; this count includes actions tied under "
+        "V_low or V*, where the tie rule decides); its action loses more than "
         f"{_fmt(po['suboptimal_tolerance'])} in one step on "
         f"{100 * po['suboptimal_fraction']:.2f} % of states (largest one-step loss "
         f"{_fmt(po['max_one_step_loss'])}). max(V* - V_sub) = "
