@@ -245,12 +245,14 @@ def main() -> None:
     ap.add_argument("--rlp-partitions", type=int, default=1_000)
     args = ap.parse_args()
     t0 = time.perf_counter()
+    load_before = os.getloadavg()
+    cpu0 = time.process_time()
     lines = [
         "## LP formulations (benchmarks/bench_formulations.py)",
         "",
         f"Run {dt.datetime.now().astimezone():%Y-%m-%d %H:%M %Z} on {machine()}. The machine "
         "is shared with other engineers working at the same time, so wall times carry "
-        "their load.",
+        "their load (load averages below; above 2 means every step waited for a core).",
         "",
     ]
     lines += bench_aggregate()
@@ -260,7 +262,13 @@ def main() -> None:
     lines += part2
     left = args.budget - (time.perf_counter() - t0)
     lines += bench_elp(left)
-    lines.append(f"Total benchmark time: {time.perf_counter() - t0:.0f} s.")
+    load_after = os.getloadavg()
+    lines.append(
+        f"Total benchmark time: {time.perf_counter() - t0:.0f} s wall, "
+        f"{time.process_time() - cpu0:.0f} s CPU of this process (all threads). Load average "
+        f"(1, 5, 15 min) before ({', '.join(f'{x:.1f}' for x in load_before)}), after "
+        f"({', '.join(f'{x:.1f}' for x in load_after)}) on 2 cores."
+    )
     write_section(lines)
     print("\n".join(lines))
 
