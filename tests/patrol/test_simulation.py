@@ -301,11 +301,21 @@ def _exact_expectations(model, policy, start, n_steps):
     return acc
 
 
-def test_monte_carlo_matches_markov_chain_expectations():
+def _patrol_model(**kw):
+    from lpbounds.patrol.model import PatrolModel
+    from lpbounds.patrol.params import PatrolParams
+
+    model = PatrolModel(PatrolParams(**kw))
+    model.p0 = lambda: float(model.params.alert_probabilities()[0])
+    return model
+
+
+@pytest.mark.parametrize("factory", [SpecModel, _patrol_model], ids=["spec", "PatrolModel"])
+def test_monte_carlo_matches_markov_chain_expectations(factory):
     """Loiter steps, service starts and the sum of (capped) service delays over a horizon:
     the mean over independent runs is within 4.5 standard errors of the exact expectation
     (computed by propagating the state distribution of pi*'s Markov chain)."""
-    model = SpecModel(N=6, stations=(0, 3), D=2, Gamma=4, alpha=0.25)
+    model = factory(N=6, stations=(0, 3), D=2, Gamma=4, alpha=0.25)
     pi = solve_exact(model.mdp()).policy
     start = int(model.encode(0, 1, 0, np.zeros((1, 2), dtype=np.int64))[0])
     n_steps, n_runs = 300, 400
