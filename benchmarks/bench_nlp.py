@@ -11,6 +11,7 @@ Usage::
     python benchmarks/bench_nlp.py            # the 12 instances of docs/nlp.md
     python benchmarks/bench_nlp.py --quick    # 4 instances
     python benchmarks/bench_nlp.py --write    # also replace the nlp section of docs/benchmarks.md
+    python benchmarks/bench_nlp.py --variants # cutting-plane variants on 4 instances
 """
 
 from __future__ import annotations
@@ -136,6 +137,34 @@ def table(rows: list[dict], max_rounds: int) -> str:
     return "\n".join(lines)
 
 
+#: cutting-plane variants compared by ``--variants`` (keyword arguments of NLP.solve)
+VARIANTS: dict[str, dict] = {
+    "default (10 cuts/round, binding rows, sum(u)+sum(v)=1)": {},
+    "1 cut/round": {"cuts_per_round": 1},
+    "CGLP on all master rows": {"cglp_rows": "all"},
+    "normalisation max abs(alpha) <= 1": {"normalization": "alpha"},
+}
+
+
+def variants(instances: list[tuple[int, int, int, int, int]], max_rounds: int) -> str:
+    """Rounds, cuts, seconds and final relative gap of each cutting-plane variant."""
+    lines = [
+        "| instance | variant | rounds | cuts | seconds | final rel. gap | converged |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for n, a, l_out, m, seed in instances:
+        nlp = NLP(garnet(n, a, l_out, 0.9, seed=seed), random_partition(n, m, seed=seed))
+        for name, kw in VARIANTS.items():
+            r = nlp.solve("cutting-planes", max_iter=max_rounds, **kw)
+            lines.append(
+                f"| n={n} A={a} L={l_out} M={m} s={seed} | {name} | {r.iterations} | {r.cuts} | "
+                f"{r.seconds:.2f} | {r.relative_gap:.1e} | "
+                f"{'yes' if r.converged else 'no: ' + r.stop_reason} |"
+            )
+            print(lines[-1], flush=True)
+    return "\n".join(lines)
+
+
 def write_section(text: str, path: Path) -> None:
     block = f"{MARK_START}\n## NLP (disjunctive lower bound): convergence\n\n{text}\n{MARK_END}"
     if path.exists():
@@ -156,7 +185,13 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="4 instances only")
     ap.add_argument("--max-rounds", type=int, default=200)
     ap.add_argument("--write", action="store_true", help="update docs/benchmarks.md")
+    ap.add_argument(
+        "--variants", action="store_true", help="compare cutting-plane variants (4 instances)"
+    )
     args = ap.parse_args()
+    if args.variants:
+        print(variants([INSTANCES[i] for i in (2, 3, 7, 10)], args.max_rounds))
+        return 0
     rows = run(QUICK if args.quick else INSTANCES, args.max_rounds)
     text = table(rows, args.max_rounds)
     print()

@@ -13,7 +13,8 @@ Master LP (a relaxation of ``F`` intersected with the box, valid for ``w*``)
 Cut-generating LP (lift-and-project, Balas 1979; Balas, Ceria & Cornuejols 1993)
     For a disjunction violated by the master's point ``wbar``, with the master's
     polyhedron written as ``Gf w >= hf`` (``G``, then the box as ``I w >= lo``,
-    ``-I w >= -hi``)::
+    ``-I w >= -hi``; by default ``G`` keeps only the single-term rows and the cuts binding
+    at ``wbar``, ``cglp_rows="binding"``)::
 
         min   wbar'alpha - beta
         s.t.  alpha = Gf'u_t + v_t a_t            for every term t   (Farkas)
@@ -559,7 +560,7 @@ def cutting_planes(
     max_rounds: int = 200,
     cuts_per_round: int = 10,
     time_limit: float | None = None,
-    cglp_rows: str = "all",
+    cglp_rows: str = "binding",
     normalization: str = "multipliers",
     on_round: Callable[[NLPIteration], None] | None = None,
     **options: Any,
@@ -632,7 +633,8 @@ def cutting_planes(
             G, h = be.master_data.A, be.master_data.row_lo
             # cglp_rows="binding": the CGLP sees only the single-term rows and the cuts
             # binding at wbar (a relaxation of the master, so its cuts are valid all the
-            # same, but weaker); the exact right-hand side below always uses the whole master
+            # same, possibly weaker); the certified right-hand side below always uses the
+            # whole master
             slack = G @ wbar - h
             keep = np.flatnonzero(
                 (np.arange(G.shape[0]) < n_single)
