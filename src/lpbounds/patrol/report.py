@@ -164,7 +164,12 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
     )
     add(
         markdown_table(
-            ["check", "max |difference|", "tolerance", "operator residual (bound / (1-λ))"],
+            [
+                "check",
+                "max |difference|" if t["method"] == "aggregate" else "bound on max |difference|",
+                "tolerance",
+                "operator residual (bound / (1-λ))",
+            ],
             [
                 [
                     "Theorem 4: RLP(full MDP) = UBLP",
