@@ -102,6 +102,34 @@ def test_exact_methods_agree_with_reference_and_bound_v_star(spec):
     assert (w.lower_values <= ref + slack).all(), "lower_values exceed w*"
 
 
+def test_singleton_partition_gives_v_star():
+    """With one state per partition every disjunction has one term: w* = V* (exact DP)."""
+    mdp = garnet(12, 3, 2, 0.9, seed=11)
+    part = Partition(np.arange(12))
+    nlp = NLP(mdp, part)
+    assert (nlp.disj_size == 1).all()
+    v_star = solve_exact(mdp, method="pi").values
+    tol = AGREE_RTOL * max(1.0, np.abs(v_star).max())
+    for method in ("fixed-point", "strategy-iteration", "milp", "cutting-planes"):
+        r = nlp.solve(method)
+        assert np.abs(r.values - v_star).max() <= tol, f"{method}: w* != V* on singletons"
+        assert r.converged, r.summary()
+
+
+def test_disallowed_actions():
+    """Pairs that are not allowed contribute no term (reference: min over allowed x only)."""
+    mdp = garnet(15, 3, 2, 0.9, seed=5, allowed_fraction=0.6)
+    part = random_partition(15, 4, seed=5)
+    ref = reference_w(mdp, part)
+    nlp = NLP(mdp, part)
+    tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
+    for method in ("fixed-point", "strategy-iteration", "milp"):
+        err = np.abs(nlp.solve(method).values - ref).max()
+        assert err <= tol, f"{method}: {err:.2e}"
+    r = nlp.solve("cutting-planes", max_iter=30)
+    _check_bracket_every_round(nlp, r, ref)
+
+
 def test_strategy_iteration_upper_bounds_decrease():
     mdp, part = instance(30, 3, 3, 6, 3)
     r = NLP(mdp, part).solve("strategy-iteration")
