@@ -104,6 +104,34 @@ def test_random_post_decision_mdp_equals_plain(seed, allowed_fraction):
     assert np.array_equal(ps.rows_of(act), rows.pair_row[np.arange(mdp.n_states), act])
 
 
+@pytest.mark.parametrize("max_codes", [0, 8, 65_536])
+def test_reward_storage_variants_equal_plain(monkeypatch, max_codes):
+    # 0: float rewards; 8: too few codes for the rewards, so float; 65,536: uint16 codes
+    monkeypatch.setattr(PostDecisionRows, "MAX_REWARD_CODES", max_codes)
+    mdp = post_decision_mdp(400, 3, 3, 0.9, seed=9, allowed_fraction=0.7)
+    ps = PostDecisionRows.detect(mdp)
+    if max_codes < 400:
+        assert ps.reward_codes is None
+    else:
+        assert ps.reward_codes.dtype == np.uint16
+        assert np.array_equal(ps.reward_table[ps.reward_codes], mdp.rewards), "codes lossy"
+    mdp.__dict__["_post_decision"] = ps
+    rows = exact_rows(mdp)
+    for method in ("vi", "mpi"):
+        assert_same_result(lb.solve_exact(mdp, method), lb.solve_exact(rows, method), rows)
+
+
+def test_patrol_rewards_are_coded_exactly():
+    mdp = small_patrol()
+    ps = post_decision_rows(mdp)
+    assert ps.reward_codes is not None and ps.reward_codes.dtype == np.uint8
+    assert np.array_equal(ps.reward_table[ps.reward_codes], mdp.rewards)
+    # bit for bit, including the sign of zero
+    assert np.array_equal(
+        ps.reward_table[ps.reward_codes].view(np.int64), np.asarray(mdp.rewards).view(np.int64)
+    )
+
+
 def test_detection_rejects_mdps_without_the_form():
     assert post_decision_rows(lb.garnet(200, 3, 4, 0.9, seed=2, shared_probabilities=True)) is None
     assert post_decision_rows(lb.garnet(200, 3, 4, 0.9, seed=2)) is None  # per-pair probs

@@ -364,3 +364,96 @@ def ps_rows(allowed, row_start, act, out):  # pragma: no cover
             if allowed[x, a]:
                 r += 1
         out[x] = r
+
+
+@njit(**_OPTS)
+def reward_codes(reward, bits, max_codes, codes, table):  # pragma: no cover
+    """Dictionary-encode ``reward`` (2-D): ``table[codes[x, u]] == reward[x, u]`` bit for bit.
+
+    Returns the number of distinct values, or -1 as soon as there are more than
+    ``max_codes`` (``codes`` is then partly written). ``bits`` is ``reward`` viewed as
+    int64: an open-addressing hash on the float's bits (so ``-0.0`` and ``0.0`` stay
+    distinct and every value is exact).
+    """
+    n, n_act = reward.shape
+    size = 1
+    while size < 4 * max_codes:
+        size *= 2
+    keys = np.empty(size, dtype=np.int64)
+    vals = np.full(size, -1, dtype=np.int64)
+    mask = size - 1
+    count = 0
+    for x in range(n):
+        for a in range(n_act):
+            b = bits[x, a]
+            h = (np.uint64(b) * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(40)
+            j = np.int64(h) & mask
+            while vals[j] >= 0 and keys[j] != b:
+                j = (j + 1) & mask
+            if vals[j] < 0:
+                if count >= max_codes:
+                    return -1
+                keys[j] = b
+                vals[j] = count
+                table[count] = reward[x, a]
+                count += 1
+            codes[x, a] = vals[j]
+    return count
+
+
+@njit(parallel=True, **_OPTS)
+def ps_max_stats_coded(first, codes, table, w, discount, v, out, arg, nchunks):  # pragma: no cover
+    """:func:`ps_max_stats` with rewards ``table[codes[x, u]]`` (fewer bytes per sweep)."""
+    n, n_act = first.shape
+    lo = np.full(nchunks, np.inf)
+    hi = np.full(nchunks, -np.inf)
+    size = (n + nchunks - 1) // nchunks
+    for c in prange(nchunks):
+        start = c * size
+        end = min(n, start + size)
+        lc = np.inf
+        hc = -np.inf
+        for i in range(start, end):
+            best = -np.inf
+            best_a = -1
+            for a in range(n_act):
+                k = first[i, a]
+                if k >= 0:
+                    q = table[codes[i, a]] + discount * w[k]
+                    if q > best:
+                        best = q
+                        best_a = a
+            out[i] = best
+            arg[i] = best_a
+            d = best - v[i]
+            lc = min(lc, d)
+            hc = max(hc, d)
+        lo[c] = lc
+        hi[c] = hc
+    return lo.min(), hi.max()
+
+
+@njit(parallel=True, **_OPTS)
+def ps_policy_stats_coded(
+    first, codes, table, act, w, discount, v, out, nchunks
+):  # pragma: no cover
+    """:func:`ps_policy_stats` with rewards ``table[codes[x, u]]``."""
+    n = first.shape[0]
+    lo = np.full(nchunks, np.inf)
+    hi = np.full(nchunks, -np.inf)
+    size = (n + nchunks - 1) // nchunks
+    for c in prange(nchunks):
+        start = c * size
+        end = min(n, start + size)
+        lc = np.inf
+        hc = -np.inf
+        for i in range(start, end):
+            a = act[i]
+            q = table[codes[i, a]] + discount * w[first[i, a]]
+            out[i] = q
+            d = q - v[i]
+            lc = min(lc, d)
+            hc = max(hc, d)
+        lo[c] = lc
+        hi[c] = hc
+    return lo.min(), hi.max()
