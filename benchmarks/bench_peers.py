@@ -138,6 +138,43 @@ print(json.dumps({{"seconds": ts, "e2e": tb + tin + ts, "input": tin, "residual"
                   "max_diff_vs_lpbounds": float(np.abs(v - vstar).max())}}))
 """
 
+SOLVE_NP = """
+# the plain vectorised numpy/scipy MPI of the issue: the same algorithm as lpbounds'
+# default (5 evaluation sweeps per improvement, Porteus shift), on scipy.sparse matrices
+import scipy.sparse as sp
+mdp, tb = build()
+t = time.perf_counter()
+P, R = mdp.to_matrices(disallowed_reward=-1e4)
+tin = time.perf_counter() - t
+tol, lam, n = target(mdp), mdp.discount, mdp.n_states
+t = time.perf_counter()
+big = sp.vstack(P).tocsr()  # (A n) x n: one product gives every Q-value
+rt = R.T.ravel()
+v = np.zeros(n)
+its = sweeps = 0
+while True:
+    q = (rt + lam * (big @ v)).reshape(len(P), n)
+    pol = q.argmax(axis=0)
+    tv = q[pol, np.arange(n)]
+    d = tv - v
+    sweeps += 1
+    if max(-d.min(), d.max()) <= tol:
+        break
+    its += 1
+    v = tv + lam / (1 - lam) * 0.5 * (d.min() + d.max())
+    p_pi = big[pol * n + np.arange(n)]
+    r_pi = rt[pol * n + np.arange(n)]
+    for _ in range(5):
+        nv = r_pi + lam * (p_pi @ v)
+        d = nv - v
+        v = nv + lam / (1 - lam) * 0.5 * (d.min() + d.max())
+        sweeps += 1
+ts = time.perf_counter() - t
+res = lb.bellman_residual(mdp, v)
+print(json.dumps({"seconds": ts, "e2e": tb + tin + ts, "input": tin, "residual": res,
+                  "tol": tol, "iterations": its, "sweeps": sweeps}))
+"""
+
 PT_UNPATCHED = """
 import mdptoolbox.mdp as tm
 mdp, tb = build()
@@ -320,6 +357,11 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="small instance, 1 repetition")
     ap.add_argument("--skip", nargs="*", default=[], help="task names to skip")
+    ap.add_argument(
+        "--only-numpy",
+        action="store_true",
+        help="run only the plain numpy MPI and merge it into the last run's results",
+    )
     args = ap.parse_args()
     params = "{}" if not args.quick else "{'N': 10, 'stations': (0, 3, 6), 'Gamma': 8}"
     reps = 1 if args.quick else args.repeat
@@ -333,6 +375,27 @@ def main() -> None:
     def rec(key: str, code: str, timeout: float = 1800) -> None:
         R.setdefault(key, []).append(run(pre + code, key, timeout))
 
+    if args.only_numpy:
+        old = json.loads((tmp / "results.json").read_text())
+        meta = old.pop("_meta", None) or _meta_from_doc(old)
+        R.update(old)
+        R.pop("solve/numpy-mpi", None)
+        for _ in range(reps):
+            rec("solve/numpy-mpi", SOLVE_NP)
+        R["_meta"] = meta
+        (tmp / "results.json").write_text(json.dumps(R, indent=1))
+        R.pop("_meta")
+        write_doc(
+            R,
+            [tuple(c) for c in meta["cli_rows"]],
+            meta["load0"],
+            meta["load1"],
+            meta["reps"],
+            meta["wall"],
+            False,
+            os.getloadavg(),
+        )
+        return
     # the lpbounds solve writes V* and pi* for the others to compare with: first
     rec("solve/lpbounds-mpi", SOLVE_LB.format(method="mpi", tmp=tmp))
     for rep in range(reps):
@@ -377,8 +440,39 @@ def main() -> None:
             rec("cli/bounds-m8", CLI.format(argv=argv), timeout=900)
         cli_rows += [("bounds m8", "cli/bounds-m8", "`lpbounds bounds models/patrol-m8.toml`", 60)]
     load1 = os.getloadavg()
-    (tmp / "results.json").write_text(json.dumps(R, indent=1))
-    write_doc(R, cli_rows, load0, load1, reps, time.time() - t_start, args.quick)
+    wall = time.time() - t_start
+    meta = {"cli_rows": cli_rows, "load0": load0, "load1": load1, "reps": reps, "wall": wall}
+    (tmp / "results.json").write_text(json.dumps({**R, "_meta": meta}, indent=1))
+    write_doc(R, cli_rows, load0, load1, reps, wall, args.quick)
+
+
+def _meta_from_doc(R: dict) -> dict:
+    """The run's metadata, read back from the peers section it wrote (older result files)."""
+    import re
+
+    from _common import DOCS
+
+    text = DOCS.read_text()
+    sec = text[text.index("<!-- peers:start -->") :]
+    num = r"([0-9.]+)"
+    m = re.search(rf"at start {num} {num} {num}, at end\s+{num} {num} {num}", sec)
+    loads = [float(x) for x in m.groups()] if m else [float("nan")] * 6
+    reps = re.search(r"Repetitions: (\d+)", sec)
+    wall = re.search(r"took ([0-9.]+) min", sec)
+    cli_rows = []
+    if "cli/reproduce" in R:
+        cli_rows += [("reproduce", "cli/reproduce", "`lpbounds reproduce --no-figures`", 20)]
+    if "cli/reproduce-figures" in R:
+        cli_rows += [("reproduce+figures", "cli/reproduce-figures", "`lpbounds reproduce`", 20)]
+    if "cli/bounds-m8" in R:
+        cli_rows += [("bounds m8", "cli/bounds-m8", "`lpbounds bounds models/patrol-m8.toml`", 60)]
+    return {
+        "cli_rows": cli_rows,
+        "load0": loads[:3],
+        "load1": loads[3:],
+        "reps": int(reps.group(1)) if reps else 0,
+        "wall": 60 * float(wall.group(1)) if wall else float("nan"),
+    }
 
 
 def versions() -> str:
@@ -393,7 +487,7 @@ def versions() -> str:
     return ", ".join(out)
 
 
-def write_doc(R, cli_rows, load0, load1, reps, wall, quick) -> None:
+def write_doc(R, cli_rows, load0, load1, reps, wall, quick, load_numpy=None) -> None:
     def row(task, ours, peer, peer_name, note=""):
         a, b = med(R.get(ours, [])), med(R.get(peer, []))
         ratio = "-" if a is None or b is None else f"**{a / b:.2f}**"
@@ -444,6 +538,7 @@ def write_doc(R, cli_rows, load0, load1, reps, wall, quick) -> None:
             ("solve/mdpsolver-mpi", "mdpsolver MPI"),
             ("solve/mdpsolver-pi", "mdpsolver PI"),
             ("solve/pymdptoolbox-vi", "pymdptoolbox VI (check patched out)"),
+            ("solve/numpy-mpi", "plain numpy/scipy MPI (same algorithm)"),
         ):
             if ours.endswith("vi") and peer.endswith("pi"):
                 continue
@@ -457,11 +552,12 @@ def write_doc(R, cli_rows, load0, load1, reps, wall, quick) -> None:
                 )
             )
     # end to end (build + input + solve)
-    for ours in ("solve/lpbounds-mpi",):
+    for ours in ("solve/lpbounds-mpi", "solve/lpbounds-vi"):
         for peer, name in (
             ("solve/mdpsolver-vi", "mdpsolver VI"),
             ("solve/mdpsolver-mpi", "mdpsolver MPI"),
             ("solve/pymdptoolbox-vi", "pymdptoolbox VI (patched)"),
+            ("solve/numpy-mpi", "plain numpy/scipy MPI"),
         ):
             a, b = e2e(ours), e2e(peer)
             ratio = "-" if a is None or b is None else f"**{a / b:.2f}**"
@@ -523,7 +619,11 @@ Machine: {machine()}. Date: {today()}. Versions: {versions()}.
 Load average (1, 5, 15 min) at start {load0[0]:.2f} {load0[1]:.2f} {load0[2]:.2f}, at end
 {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f} (2 cores: above ~2 the machine was shared and all
 times are inflated). Repetitions: {reps} (median; each measurement a fresh process; tools
-alternate within a repetition); the whole run took {wall / 60:.1f} min.
+alternate within a repetition); the whole run took {wall / 60:.1f} min.{
+            ""
+            if load_numpy is None
+            else f" The plain numpy MPI rows were measured after, at load {load_numpy[0]:.2f}."
+        }
 {"QUICK RUN (small instance): not the paper's numbers." if quick else ""}
 
 Model: the paper's instance (2,048,000 states, 3 actions, 5 outcomes, 4,653,056 allowed

@@ -1,0 +1,171 @@
+"""Exact V* of patrol instances against their number of states: Gamma = 5..15, m = 2..5.
+
+Each instance runs in a fresh process: the model build (``PatrolModel(...).mdp()``), the
+exact solve (``solve_exact``, MPI, to residual <= 1e-10 max|R|/(1-discount)) and the
+process's peak RSS. Stations are spread over the paper's 15-node ring (m = 4 is the
+paper's (0, 3, 7, 11)); the other parameters are the paper's. Writes the ``scaling``
+section of docs/benchmarks.md and the plot docs/img/scaling.png.
+
+    python benchmarks/bench_scaling.py [--max-states 40000000] [--gammas 5 7 9 11 13 15]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+from _common import DOCS, machine, run_isolated, today, write_section
+
+STATIONS = {2: (0, 7), 3: (0, 5, 10), 4: (0, 3, 7, 11), 5: (0, 3, 6, 9, 12)}
+
+POINT = """
+import json, time
+import lpbounds as lb
+from lpbounds.patrol import PatrolModel, PatrolParams
+lb.solve_exact(PatrolModel(PatrolParams(N=6, stations=(0, 3), Gamma=4)).mdp())  # JIT warm-up
+t = time.perf_counter()
+model = PatrolModel(PatrolParams(stations={stations}, Gamma={gamma}))
+mdp = model.mdp()
+tb = time.perf_counter() - t
+del model  # its cached state table is not needed by the solve
+t = time.perf_counter()
+r = lb.solve_exact(mdp, "{method}")
+ts = time.perf_counter() - t
+print(json.dumps({{"n": mdp.n_states, "build": tb, "solve": ts, "residual": r.residual,
+                  "tol": r.tol, "iterations": r.iterations, "sweeps": r.sweeps}}))
+"""
+
+
+def n_states(m: int, gamma: int, n_nodes: int = 15, big_d: int = 5) -> int:
+    """Eq. (27)."""
+    return 2 * n_nodes * (gamma + 1) ** m + m * big_d * (gamma + 1) ** (m - 1)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--max-states", type=int, default=40_000_000)
+    ap.add_argument("--gammas", type=int, nargs="*", default=list(range(5, 16)))
+    ap.add_argument("--ms", type=int, nargs="*", default=[2, 3, 4, 5])
+    ap.add_argument("--method", default="mpi")
+    args = ap.parse_args()
+    load0 = os.getloadavg()
+    t0 = time.time()
+    results, skipped = [], []
+    for m in args.ms:
+        for g in args.gammas:
+            n = n_states(m, g)
+            if n > args.max_states:
+                skipped.append((m, g, n))
+                continue
+            code = POINT.format(stations=STATIONS[m], gamma=g, method=args.method)
+            try:
+                out = run_isolated(code, timeout=1800)
+            except Exception as exc:  # record and go on
+                out = {"n": n, "error": str(exc)[-300:]}
+            out.update(m=m, gamma=g)
+            results.append(out)
+            print(json.dumps(out), flush=True)
+    load1 = os.getloadavg()
+    img = DOCS.parent / "img" / "scaling.png"
+    plot(results, img)
+    (Path("/tmp") / "lpbounds-scaling.json").write_text(json.dumps(results, indent=1))
+    rows = []
+    for r in results:
+        if "error" in r:
+            rows.append(f"| {r['m']} | {r['gamma']} | {r['n']:,} | failed: {r['error'][-80:]} ||||")
+            continue
+        ok = "yes" if r["residual"] <= r["tol"] else "NO"
+        rows.append(
+            f"| {r['m']} | {r['gamma']} | {r['n']:,} | {r['build']:.2f} | {r['solve']:.2f} | "
+            f"{r['iterations']} / {r['sweeps']} | {ok} | {r['peak_rss_mb']:.0f} |"
+        )
+    skip = ", ".join(f"m={m} Gamma={g} ({n:,} states)" for m, g, n in skipped)
+    body = (
+        f"""## Scaling: exact V* of patrol instances vs number of states
+
+Machine: {machine()}. Date: {today()}. Load average at start {load0[0]:.2f}, at end
+{load1[0]:.2f} (2 cores; above ~2 the times are inflated). One fresh process per instance
+(single run, not a median). Stations on the 15-node ring: {STATIONS}; other parameters
+the paper's. Build = `PatrolModel(params).mdp()`; solve = `solve_exact(mdp, "{args.method}")`
+to residual <= 1e-10 max|R|/(1-discount) (post-decision fast path); peak = the process's
+peak RSS (build and solve). The whole run took {(time.time() - t0) / 60:.1f} min.
+{"Skipped (over --max-states " + f"{args.max_states:,}): " + skip if skip else ""}
+
+![time vs states](img/scaling.png)
+
+| m | Gamma | states | build s | solve s | improvements / sweeps | residual ok | peak MB |
+|---|---|---|---|---|---|---|---|
+"""
+        + "\n".join(rows)
+        + "\n"
+    )
+    write_section("scaling", body)
+
+
+def plot(results: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    markers = {2: "o", 3: "s", 4: "^", 5: "D"}
+    for m in sorted({r["m"] for r in results}):
+        rs = sorted((r for r in results if r["m"] == m and "error" not in r), key=lambda r: r["n"])
+        if not rs:
+            continue
+        n = [r["n"] for r in rs]
+        axes[0].loglog(n, [r["solve"] for r in rs], marker=markers.get(m, "o"), label=f"m={m}")
+        axes[0].loglog(
+            n,
+            [r["build"] for r in rs],
+            marker=markers.get(m, "o"),
+            ls=":",
+            color=axes[0].lines[-1].get_color(),
+        )
+        axes[1].loglog(
+            n, [r["peak_rss_mb"] for r in rs], marker=markers.get(m, "o"), label=f"m={m}"
+        )
+        for r in rs:
+            if r["gamma"] in (5, 15):
+                axes[0].annotate(
+                    f"G={r['gamma']}",
+                    (r["n"], r["solve"]),
+                    fontsize=7,
+                    textcoords="offset points",
+                    xytext=(3, -9),
+                )
+    allr = [r for r in results if "error" not in r]
+    if allr:
+        lo, hi = min(r["n"] for r in allr), max(r["n"] for r in allr)
+        ref = (
+            max(r["solve"] / r["n"] for r in allr if r["n"] >= 1e6)
+            if any(r["n"] >= 1e6 for r in allr)
+            else allr[-1]["solve"] / allr[-1]["n"]
+        )
+        axes[0].loglog(
+            [lo, hi], [ref * lo, ref * hi], color="gray", lw=0.8, ls="--", label="linear in states"
+        )
+    axes[0].axhline(1.5, color="red", lw=0.8, label="1.5 s target (paper instance)")
+    axes[0].axvline(2_048_000, color="gray", lw=0.6)
+    axes[0].set_xlabel("number of states")
+    axes[0].set_ylabel("seconds (solid: exact V*; dotted: model build)")
+    axes[0].set_title("Patrol MDP: time vs states (Gamma = 5..15)")
+    axes[0].legend(fontsize=8)
+    axes[1].axhline(8192, color="red", lw=0.8, label="8 GB")
+    axes[1].axhline(1024, color="orange", lw=0.8, label="1 GB")
+    axes[1].set_xlabel("number of states")
+    axes[1].set_ylabel("peak RSS of the process (MB)")
+    axes[1].set_title("memory (build + solve)")
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
