@@ -654,8 +654,69 @@ Commands of lpbounds itself (no peer does these; targets from the issues):
 """
         + "\n".join(cli)
         + "\n"
+        + targets(R, e2e)
     )
     write_section("peers", body)
+
+
+def targets(R, e2e) -> str:
+    """The issue's targets against this run's medians."""
+
+    def t(key):
+        return med(R.get(key, []))
+
+    out = [
+        "",
+        "Targets (issue 6) against this run:",
+        "",
+        "| target | measured | met |",
+        "|---|---|---|",
+    ]
+
+    def add(what, value, ok):
+        out.append(f"| {what} | {value} | {'yes' if ok else '**no**'} |")
+
+    for m in ("mpi", "vi"):
+        v = t(f"solve/lpbounds-{m}")
+        if v is not None:
+            add(
+                f"exact V* of the paper's instance <= 1.5 s ({m.upper()}, MDP given)",
+                f"{v:.2f} s",
+                v <= 1.5,
+            )
+    pk = peak(R.get("solve/lpbounds-mpi", []))
+    if pk is not None:
+        add("peak memory <= 1 GB (build + solve process)", f"{pk:.0f} MB", pk <= 1024)
+    b = t("build/lpbounds")
+    if b is not None:
+        add("model build <= 1.5 s (issue 5)", f"{b:.2f} s", b <= 1.5)
+    ours = min(x for x in (e2e("solve/lpbounds-mpi"), e2e("solve/lpbounds-vi")) if x)
+    peers = [e2e(k) for k in ("solve/mdpsolver-vi", "solve/mdpsolver-mpi", "solve/mdpsolver-pi")]
+    peers = [x for x in peers if x]
+    if peers:
+        r = min(peers) / ours
+        add(
+            ">= 3x faster than mdpsolver's fastest method end to end (incl. model input)",
+            f"{r:.1f}x ({ours:.2f} s vs {min(peers):.2f} s)",
+            r >= 3,
+        )
+    np_e2e = e2e("solve/numpy-mpi")
+    if np_e2e:
+        r = np_e2e / ours
+        add(
+            ">= 2x faster than the plain numpy MPI end to end",
+            f"{r:.1f}x ({ours:.2f} s vs {np_e2e:.2f} s)",
+            r >= 2,
+        )
+    for key, what, lim in (
+        ("cli/reproduce", "full reproduction <= 20 s (no figures)", 20),
+        ("cli/reproduce-figures", "full reproduction <= 20 s (figures)", 20),
+        ("cli/bounds-m8", "bounds for 8 stations <= 60 s", 60),
+    ):
+        v = t(key)
+        if v is not None:
+            add(what, f"{v:.1f} s", v <= lim)
+    return "\n".join(out) + "\n"
 
 
 def _split(R, key) -> str:
