@@ -19,39 +19,17 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import os
-import platform
-import re
 import time
 from pathlib import Path
 
 import highspy
 import numpy as np
+from _common import machine, write_section
 
 from lpbounds import BellmanRows, garnet, load_instance, random_partition
 from lpbounds.formulations import ELP, RLP
 
-ROOT = Path(__file__).resolve().parents[1]
-DOC = ROOT / "docs" / "benchmarks.md"
-START, END = "<!-- formulations:start -->", "<!-- formulations:end -->"
 ELP_LIMIT = 300.0
-
-
-def machine() -> str:
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    mem = "unknown"
-    try:
-        kb = int(re.search(r"MemTotal:\s+(\d+)", Path("/proc/meminfo").read_text()).group(1))
-        mem = f"{kb / 2**20:.1f} GiB"
-    except (OSError, AttributeError):
-        pass
-    return f"{os.cpu_count()} cores (nproc), {cpu}, {mem} RAM, Python {platform.python_version()}"
 
 
 def highspy_solve(a, b, c, time_limit: float, **options: object) -> tuple[float, str, float]:
@@ -227,17 +205,6 @@ def bench_elp(budget: float) -> list[str]:
     return lines
 
 
-def write_section(lines: list[str]) -> None:
-    body = "\n".join([START, *lines, END])
-    DOC.parent.mkdir(parents=True, exist_ok=True)
-    text = DOC.read_text() if DOC.exists() else "# Benchmarks\n"
-    if START in text and END in text:
-        text = re.sub(re.escape(START) + r".*?" + re.escape(END), lambda _: body, text, flags=re.S)
-    else:
-        text = text.rstrip("\n") + "\n\n" + body + "\n"
-    DOC.write_text(text)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--budget", type=float, default=900.0, help="total seconds (about)")
@@ -269,7 +236,7 @@ def main() -> None:
         f"(1, 5, 15 min) before ({', '.join(f'{x:.1f}' for x in load_before)}), after "
         f"({', '.join(f'{x:.1f}' for x in load_after)}) on 2 cores."
     )
-    write_section(lines)
+    write_section("formulations", "\n".join(lines))
     print("\n".join(lines))
 
 

@@ -18,13 +18,9 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import os
-import platform
-import sys
-import time
-from pathlib import Path
 
 import numpy as np
+from _common import machine, today, write_section
 
 from lpbounds.formulations.nlp import NLP
 from lpbounds.generators import garnet, random_partition
@@ -46,7 +42,6 @@ INSTANCES: list[tuple[int, int, int, int, int]] = [
 ]
 QUICK = INSTANCES[:4]
 METHODS = ("fixed-point", "strategy-iteration", "milp", "cutting-planes")
-MARK_START, MARK_END = "<!-- nlp:start -->", "<!-- nlp:end -->"
 
 
 def run(instances: list[tuple[int, int, int, int, int]], max_rounds: int) -> list[dict]:
@@ -108,8 +103,7 @@ def table(rows: list[dict], max_rounds: int) -> str:
     lines = [
         f"Garnet MDPs (discount 0.9), random partitions, cost all ones; cutting planes with "
         f"at most 10 cuts a round, {max_rounds} rounds, gap target 1e-6 relative. Machine: "
-        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores (shared), "
-        f"Python {sys.version.split()[0]}, {time.strftime('%Y-%m-%d')}. "
+        f"{machine()} (shared), {today()}. "
         "`disj` = disjunctions / those with 2+ terms; `gap` = upper - lower bound on c'w* "
         "at the end; `exact UB at` = the round whose upper bound (the strategy read off the "
         "master point) first equals c'w*; `bracket` = lower <= c'w* <= upper at every "
@@ -182,21 +176,6 @@ def scale_run(seconds: float = 20.0) -> str:
     return "\n".join(out)
 
 
-def write_section(text: str, path: Path) -> None:
-    block = f"{MARK_START}\n## NLP (disjunctive lower bound): convergence\n\n{text}\n{MARK_END}"
-    if path.exists():
-        old = path.read_text()
-        if MARK_START in old and MARK_END in old:
-            head, rest = old.split(MARK_START, 1)
-            _, tail = rest.split(MARK_END, 1)
-            new = head + block + tail
-        else:
-            new = old.rstrip("\n") + "\n\n" + block + "\n"
-    else:
-        new = "# Benchmarks\n\n" + block + "\n"
-    path.write_text(new)
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="4 instances only")
@@ -220,7 +199,7 @@ def main() -> int:
     print()
     print(text)
     if args.write:
-        write_section(text, Path(__file__).resolve().parents[1] / "docs" / "benchmarks.md")
+        write_section("nlp", f"## NLP (disjunctive lower bound): convergence\n\n{text}")
     return 0 if all(r["bracket_ok"] for r in rows) else 1
 
 

@@ -34,6 +34,7 @@ __all__ = [
     "Formulation",
     "LPResult",
     "Status",
+    "aggregated_cost",
     "check_cost",
     "installed_lp_solvers",
     "resolve_solver",
@@ -128,6 +129,24 @@ def resolve_solver(name: str) -> str:
     raise SolverNotInstalledError(
         f"unknown solver {name!r}; installed LP solvers: {', '.join(installed_lp_solvers())}"
     )
+
+
+def aggregated_cost(mdp: Any, partition: Any, cost: Any, partition_cost: Any) -> np.ndarray:
+    """``c-bar(i) = sum_{x in S_i} c(x)`` from a per-state ``cost``, or ``partition_cost`` as given.
+
+    The objective of every formulation over partitions (RLP eq. 9, SLP eq. 12, NLP eq. 24):
+    validated, with the partition checked against the MDP.
+    """
+    if partition.n_states != mdp.n_states:
+        raise ValidationError(
+            f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
+        )
+    if cost is not None and partition_cost is not None:
+        raise ValidationError("give cost (per state) or partition_cost (per partition), not both")
+    if partition_cost is not None:
+        return check_cost(partition_cost, partition.n_partitions, "partition_cost")
+    c = check_cost(cost, mdp.n_states)
+    return np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
 
 
 def check_cost(cost: Any, n: int, what: str = "cost") -> np.ndarray:

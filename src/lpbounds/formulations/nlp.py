@@ -67,7 +67,7 @@ from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
 from ..tolerances import NLP_GAP_RTOL, NLP_MILP_GAP_RTOL, NLP_SWITCH_RTOL, dp_scale
-from .base import check_cost, resolve_solver
+from .base import aggregated_cost, resolve_solver
 
 __all__ = ["NLP", "NLPIteration", "NLPResult"]
 
@@ -220,21 +220,9 @@ class NLP:
             raise ValidationError(f"mdp must be a FiniteMDP; got {type(mdp).__name__}")
         if not isinstance(partition, Partition):
             raise ValidationError(f"partition must be a Partition; got {type(partition).__name__}")
-        if partition.n_states != mdp.n_states:
-            raise ValidationError(
-                f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
-            )
-        if cost is not None and partition_cost is not None:
-            raise ValidationError(
-                "give cost (per state) or partition_cost (per partition), not both"
-            )
+        cbar = aggregated_cost(mdp, partition, cost, partition_cost)
         self.mdp = mdp
         self.partition = partition
-        if partition_cost is not None:
-            cbar = check_cost(partition_cost, partition.n_partitions, "partition_cost")
-        else:
-            c = check_cost(cost, mdp.n_states)
-            cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
         self.cost = cbar
         self.rows = BellmanRows.aggregate(mdp, partition, reduce="min")
         r = self.rows

@@ -16,11 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
-from .base import check_cost
+from .base import aggregated_cost
 from .rows_lp import RowsLP
 
 __all__ = ["RLP"]
@@ -59,21 +58,9 @@ class RLP(RowsLP):
         partition_cost: Any = None,
         rows: BellmanRows | None = None,
     ) -> None:
-        if partition.n_states != mdp.n_states:
-            raise ValidationError(
-                f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
-            )
-        if cost is not None and partition_cost is not None:
-            raise ValidationError(
-                "give cost (per state) or partition_cost (per partition), not both"
-            )
+        cbar = aggregated_cost(mdp, partition, cost, partition_cost)
         self.mdp = mdp
         self.partition = partition
-        if partition_cost is not None:
-            cbar = check_cost(partition_cost, partition.n_partitions, "partition_cost")
-        else:
-            c = check_cost(cost, mdp.n_states)
-            cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
         if rows is None:
             rows = BellmanRows.aggregate(mdp, partition, reduce="max")
         super().__init__(rows, cbar)

@@ -46,7 +46,7 @@ from ..errors import ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
-from .base import LPResult, check_cost
+from .base import LPResult, aggregated_cost
 from .rows_lp import RowsLP
 
 __all__ = ["SLP"]
@@ -120,15 +120,10 @@ class SLP(RowsLP):
     name = "SLP"
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, mu: Any, cost: Any = None) -> None:
-        if partition.n_states != mdp.n_states:
-            raise ValidationError(
-                f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
-            )
+        cbar = aggregated_cost(mdp, partition, cost, None)
         self.mdp = mdp
         self.partition = partition
         self.mu = _check_mu(mu, mdp, partition)
-        c = check_cost(cost, mdp.n_states)
-        cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
         rows, weights, row_of_pair = _surrogate_rows(mdp, partition, self.mu)
         self.weights = weights
         self.row_of_pair = row_of_pair
