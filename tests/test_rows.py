@@ -129,17 +129,44 @@ def test_maxmin_operator_matches_loops():
     np.testing.assert_allclose(q[arg], got, rtol=1e-14)
 
 
-def test_hash_collisions_fall_back_to_exact_grouping(monkeypatch):
-    mdp = lb.garnet(40, 2, 3, 0.9, seed=6)
+def test_key_collisions_fall_back_to_exact_grouping(monkeypatch):
+    mdp = lb.garnet(40, 2, 3, 0.9, seed=6, shared_probabilities=True)
     part = lb.random_partition(40, 5, seed=6)
     honest = lb.BellmanRows.aggregate(mdp, part)
+    # pretend the fast path saw a collision, then make every row's fallback hash collide too
+    monkeypatch.setattr(rows_mod._aggregate, "mark_groups", lambda *args: True)
 
     def constant_hash(owner, action, targets, probbits, out):
-        out[:] = 7  # every row collides
+        out[:] = 7
 
     monkeypatch.setattr(rows_mod._kernels, "hash_rows", constant_hash)
     collided = lb.BellmanRows.aggregate(mdp, part)
     assert rows_as_dict(collided) == rows_as_dict(honest)
+    np.testing.assert_array_equal(collided.indptr, honest.indptr)
+    # every pair maps to a row with the same content (row order within a block may differ)
+    xs, us = np.nonzero(mdp.allowed)
+
+    def content(rows, r):
+        p = np.asarray(rows.probs)[r]
+        return (rows.owner[r], rows.action[r], rows.reward[r], tuple(rows.targets[r][p > 0]))
+
+    for x, u in zip(xs, us, strict=True):
+        assert content(collided, collided.pair_row[x, u]) == content(honest, honest.pair_row[x, u])
+    np.testing.assert_array_equal(collided.pair_tight, honest.pair_tight)
+
+
+def test_mark_groups_detects_equal_keys_of_different_rows():
+    # rows 0-2 share a hash; rows 1 and 2 differ (a collision); row 3 is another bucket
+    # with the same content and hash as row 0 (never merged across buckets)
+    oa = np.array([4, 4, 4, 6])
+    key = np.array([5, 5, 5, 5], dtype=np.uint64)
+    t = np.array([[0, 1], [0, 1], [0, 2], [0, 1]], dtype=np.int32)
+    pbits = np.zeros((4, 2), dtype=np.int64)
+    new = np.empty(4, dtype=bool)
+    order = np.arange(4)
+    assert rows_mod._aggregate.mark_groups(order, oa, key, t, pbits, new, 2)
+    np.testing.assert_array_equal(new, [True, False, True, True])
+    assert not rows_mod._aggregate.mark_groups(order[:2], oa, key, t, pbits, new, 2)
 
 
 def test_from_arrays_validation():

@@ -50,7 +50,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
-from . import _kernels
+from . import _aggregate, _kernels
 from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
@@ -250,44 +250,49 @@ class BellmanRows:
         if reduce not in ("max", "min"):
             raise ValidationError(f"reduce must be 'max' or 'min'; got {reduce!r}")
         exact = cls.from_mdp(mdp)
-        labels = partition.labels
         m = partition.n_partitions
         idt = index_dtype(m)
-        owner = labels[exact.owner].astype(idt)
-        raw_t = labels[exact.targets].astype(idt)
-        targets = np.empty_like(raw_t)
-        probs = np.empty(raw_t.shape, dtype=np.float64)
-        _kernels.canonicalize(raw_t, exact.probs, targets, probs)
-        del raw_t
-        group, n_groups = _group_rows(owner, exact.action, targets, probs)
-        # reduce rewards within groups; keep the first row of each group as representative
-        order = np.argsort(group, kind="stable")
-        starts = np.flatnonzero(np.r_[True, np.diff(group[order]) != 0])
-        ufunc = np.maximum if reduce == "max" else np.minimum
-        red = ufunc.reduceat(exact.reward[order], starts)
-        rep = order[starts]
-        # sort the merged rows by (owner, action)
-        final = np.lexsort((exact.action[rep], owner[rep]))
-        rank = np.empty(n_groups, dtype=np.int64)
-        rank[final] = np.arange(n_groups)
-        rep = rep[final]
+        n_rows, n_out = exact.targets.shape
+        labels = partition.labels.astype(idt)
+        owner = np.empty(n_rows, dtype=idt)
+        targets = np.empty((n_rows, n_out), dtype=idt)
+        probs = np.empty((n_rows, n_out), dtype=np.float64)
+        oa = np.empty(n_rows, dtype=np.int64)
+        key = np.empty(n_rows, dtype=np.uint64)
+        nchunks = max(1, 8 * numba.get_num_threads())
+        _aggregate.canonical_rows(
+            labels, exact.owner, exact.action, exact.targets, exact.probs, mdp.n_actions,
+            owner, targets, probs, oa, key, nchunks,
+        )  # fmt: skip
+        order, offsets = _aggregate.bucket_order(oa, m * mdp.n_actions)
+        _aggregate.sort_buckets(order, offsets, key)
+        new = np.empty(n_rows, dtype=bool)
+        if _aggregate.mark_groups(order, oa, key, targets, probs.view(np.int64), new, nchunks):
+            # a 64-bit hash collision between different rows: group exactly instead
+            group, _ = _group_rows(owner, exact.action, targets, probs)
+            order = np.lexsort((group, exact.action, owner))
+            new = np.r_[True, np.diff(group[order]) != 0]
+        # groups are contiguous in `order` and sorted by (owner, action)
+        starts = np.append(np.flatnonzero(new), n_rows)
+        n_groups = starts.size - 1
+        group = np.empty(n_rows, dtype=np.int64)
+        reward_merged = np.empty(n_groups)
+        g_owner = np.empty(n_groups, dtype=idt)
+        g_action = np.empty(n_groups, dtype=np.int32)
+        g_t = np.empty((n_groups, n_out), dtype=idt)
+        g_p = np.empty((n_groups, n_out))
+        _aggregate.merge_groups(
+            order, starts, exact.reward, reduce == "max", owner, exact.action, targets, probs,
+            group, reward_merged, g_owner, g_action, g_t, g_p,
+        )  # fmt: skip
+        del targets, probs, owner, key, oa, order
         pair_row = np.full(exact.pair_row.shape, -1, dtype=np.int64)
         allowed = exact.pair_row >= 0
-        row_of_exact = rank[group]
-        pair_row[allowed] = row_of_exact[exact.pair_row[allowed]]
-        reward_merged = red[final]
+        pair_row[allowed] = group[exact.pair_row[allowed]]
         tight = np.zeros(pair_row.shape, dtype=bool)
         tight[allowed] = exact.reward[exact.pair_row[allowed]] == reward_merged[pair_row[allowed]]
         return cls._finish(
-            m,
-            owner[rep],
-            exact.action[rep].astype(np.int32),
-            reward_merged,
-            targets[rep],
-            probs[rep],
-            mdp.discount,
-            pair_row,
-            tight,
+            m, g_owner, g_action, reward_merged, g_t, g_p, mdp.discount, pair_row, tight
         )
 
     # ------------------------------------------------------------------ properties
