@@ -106,32 +106,39 @@ def bench_aggregate() -> list[str]:
 
 
 def _aggregate_steps(mdp, part) -> str:
-    """Time the stages of ``BellmanRows.aggregate`` (its private helpers; best effort)."""
+    """Time the stages of ``BellmanRows.aggregate`` (its private kernels; best effort)."""
     try:
-        from lpbounds import _kernels
-        from lpbounds.rows import _group_rows
+        import numba
+
+        from lpbounds import _aggregate
+        from lpbounds.mdp import index_dtype
 
         out = []
-        t0 = time.perf_counter()
+        clock = time.perf_counter
+        t0 = clock()
         exact = BellmanRows.from_mdp(mdp)
-        out.append(("exact rows (views)", time.perf_counter() - t0))
-        t0 = time.perf_counter()
-        owner = part.labels[exact.owner]
-        raw_t = part.labels[exact.targets]
-        out.append(("label gathers", time.perf_counter() - t0))
-        t0 = time.perf_counter()
-        targets = np.empty_like(raw_t)
-        probs = np.empty(raw_t.shape)
-        _kernels.canonicalize(raw_t, exact.probs, targets, probs)
-        out.append(("canonicalize (numba)", time.perf_counter() - t0))
-        t0 = time.perf_counter()
-        group, _ = _group_rows(owner, exact.action, targets, probs)
-        out.append(("hash + argsort grouping", time.perf_counter() - t0))
-        t0 = time.perf_counter()
-        np.argsort(group, kind="stable")
-        out.append(("argsort of group ids (one of the merge steps)", time.perf_counter() - t0))
-        return "; ".join(f"{k} {v:.2f} s" for k, v in out)
-    except Exception as exc:  # the helpers are private to rows.py and may change
+        out.append(("exact rows (views)", clock() - t0))
+        m, (n_rows, n_out) = part.n_partitions, exact.targets.shape
+        idt = index_dtype(m)
+        owner, oa = np.empty(n_rows, idt), np.empty(n_rows, np.int64)
+        targets, probs = np.empty((n_rows, n_out), idt), np.empty((n_rows, n_out))
+        key, nch = np.empty(n_rows, np.uint64), 8 * numba.get_num_threads()
+        t0 = clock()
+        _aggregate.canonical_rows(
+            part.labels.astype(idt), exact.owner, exact.action, exact.targets, exact.probs,
+            mdp.n_actions, owner, targets, probs, oa, key, nch,
+        )  # fmt: skip
+        out.append(("labels + canonical form + hash", clock() - t0))
+        t0 = clock()
+        order, offsets = _aggregate.bucket_order(oa, m * mdp.n_actions)
+        _aggregate.sort_buckets(order, offsets, key)
+        out.append(("counting sort + bucket sorts", clock() - t0))
+        t0 = clock()
+        new = np.empty(n_rows, bool)
+        _aggregate.mark_groups(order, oa, key, targets, probs.view(np.int64), new, nch)
+        out.append(("group marks", clock() - t0))
+        return "; ".join(f"{k} {v:.2f} s" for k, v in out) + " (then the merge kernel)"
+    except Exception as exc:  # the kernels are private to rows.py and may change
         return f"(not available: {exc})"
 
 
