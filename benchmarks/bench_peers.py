@@ -326,7 +326,7 @@ print(json.dumps({"seconds": ts, "rows": int(uniq.shape[0])}))
 CLI = """
 import subprocess, resource, sys, time, json
 t = time.perf_counter()
-p = subprocess.run({argv!r}, capture_output=True, text=True)
+p = subprocess.run({argv!r}, capture_output=True, text=True, cwd={cwd!r})
 ts = time.perf_counter() - t
 peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
 print(json.dumps({{"seconds": ts, "child_peak_mb": peak, "rc": p.returncode,
@@ -441,16 +441,16 @@ def main() -> None:
     if has_reproduce and "reproduce" not in args.skip and not args.quick:
         argv = [exe, "reproduce", "--out", str(tmp / "reproduce"), "--no-figures"]
         for _ in range(min(reps, 2)):
-            rec("cli/reproduce", CLI.format(argv=argv), timeout=900)
+            rec("cli/reproduce", CLI.format(argv=argv, cwd=str(ROOT)), timeout=900)
         argv_f = [exe, "reproduce", "--out", str(tmp / "reproduce-fig")]
-        rec("cli/reproduce-figures", CLI.format(argv=argv_f), timeout=900)
+        rec("cli/reproduce-figures", CLI.format(argv=argv_f, cwd=str(ROOT)), timeout=900)
         cli_rows += [("reproduce", "cli/reproduce", "`lpbounds reproduce --no-figures`", 20)]
         cli_rows += [("reproduce+figures", "cli/reproduce-figures", "`lpbounds reproduce`", 20)]
     m8 = ROOT / "models/patrol-m8.toml"
     if m8.exists() and "bounds" not in args.skip and not args.quick:
         argv = [exe, "bounds", str(m8)]
         for _ in range(min(reps, 2)):
-            rec("cli/bounds-m8", CLI.format(argv=argv), timeout=900)
+            rec("cli/bounds-m8", CLI.format(argv=argv, cwd=str(ROOT)), timeout=900)
         cli_rows += [("bounds m8", "cli/bounds-m8", "`lpbounds bounds models/patrol-m8.toml`", 60)]
     load1 = os.getloadavg()
     wall = time.time() - t_start
