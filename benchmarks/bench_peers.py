@@ -621,10 +621,9 @@ def write_doc(R, cli_rows, load0, load1, reps, wall, quick, load_numpy=None) -> 
         ok = all(r.get("rc") == 0 for r in rs)
         t = med(rs)
         pk = max((r.get("child_peak_mb", 0) for r in rs), default=None)
-        cli.append(
-            f"| {cmd} | {fmt(t)} | {fmt(pk, 0)} | {target} | "
-            f"{'ok' if ok else 'FAILED: ' + rs[0].get('tail', '')[-120:] if rs else 'n/a'} |"
-        )
+        tail = " ".join(rs[0].get("tail", "").split())[-120:] if rs else ""
+        status = "n/a" if not rs else ("ok" if ok else "FAILED: " + tail)
+        cli.append(f"| {cmd} | {fmt(t)} | {fmt(pk, 0)} | {target} | {status} |")
     body = (
         f"""## Peers: lpbounds vs mdpsolver and pymdptoolbox on the paper's patrol MDP
 
