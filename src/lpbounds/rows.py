@@ -23,9 +23,10 @@ and whose actions at ``i`` are the rows of ``i`` (each row's outcome probabiliti
 non-negative and sum to 1). ``T`` is that MDP's Bellman operator: monotone and a
 ``lambda``-contraction in the max norm, so it has one fixed point ``v*``. If ``v`` is in
 ``F`` then ``v >= Tv``, hence ``v >= T^k v -> v*`` by monotonicity; ``v*`` itself is in
-``F``. So ``v*`` is the least element, and ``c'v >= c'v*`` for ``c >= 0``. This is
-Lemma 1 and Remark 3 of the paper, and, with the RLP's rows, Theorem 1: RLP's optimum
-does not depend on the cost. []
+``F``. So ``v*`` is the least element, and ``c'v >= c'v*`` for ``c >= 0``. For exact
+rows this is Lemma 1 (ELP's optimum is ``V*``) with the remark that every feasible
+point dominates ``V*``; with the RLP's rows it is Theorem 1: RLP's optimum does not
+depend on the cost. []
 
 **Fact 2 (disjunctive rows).** Group the rows of owner ``i`` by action ``u``. The set
 ``G = {w : w(i) >= min_{r in (i, u)} q_r(w) for every (i, u)}`` has the least element

@@ -4,7 +4,8 @@ r"""The restricted LP under state aggregation (paper eq. 9, compact form eq. 10)
           v(i) \ge R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))
           \;\; \forall x \in S_i,\ i = 1..M,\ \forall u.
 
-``Phi v*`` is an upper bound on ``V*`` (Lemma 3 via Lemma 1), and by Theorem 1 the
+``Phi v*`` is an upper bound on ``V*`` (every solution of the Bellman inequalities
+dominates ``V*``: the paper's lemma on iterated Bellman inequalities), and by Theorem 1 the
 optimum ``v*`` is the same for every cost ``c >= 0``: it is the least feasible point,
 the fixed point of the max over the aggregated rows (Fact 1 in :mod:`lpbounds.rows`),
 and every feasible ``v`` dominates it.
