@@ -382,10 +382,15 @@ def main() -> None:
     def rec(key: str, code: str, timeout: float = 1800) -> None:
         R.setdefault(key, []).append(run(pre + code, key, timeout))
 
-    if args.only:
+    if args.only is not None:  # "--only" alone: rewrite the section from the last results
         old = json.loads((tmp / "results.json").read_text())
         meta = old.pop("_meta", None) or _meta_from_doc(old)
         R.update(old)
+        rerun = meta.get("rerun", [])
+        if args.only:
+            rerun = sorted(set(rerun) | set(args.only))
+            meta["load_rerun"] = os.getloadavg()
+        meta["rerun"] = rerun
         tasks = {
             "numpy": ("solve/numpy-mpi", SOLVE_NP),
             "pymdptoolbox": ("solve/pymdptoolbox-vi", SOLVE_PT.format(tmp=tmp)),
@@ -406,7 +411,12 @@ def main() -> None:
             meta["reps"],
             meta["wall"],
             False,
-            os.getloadavg(),
+            (
+                [{"numpy": "plain numpy MPI", "pymdptoolbox": "pymdptoolbox VI"}[r] for r in rerun],
+                meta.get("load_rerun", [float("nan")]),
+            )
+            if rerun
+            else None,
         )
         return
     # the lpbounds solve writes V* and pi* for the others to compare with: first
@@ -574,8 +584,10 @@ def write_doc(R, cli_rows, load0, load1, reps, wall, quick, load_numpy=None) -> 
         ):
             a, b = e2e(ours), e2e(peer)
             ratio = "-" if a is None or b is None else f"**{a / b:.2f}**"
+            meth = ours.split("-")[-1].upper()
             lines.append(
-                f"| end to end: build + input + V* | {fmt(a)} | | {name} | {fmt(b)} | | {ratio} | |"
+                f"| end to end: build + input + V* ({meth}) | {fmt(a)} | | {name} | {fmt(b)} | | "
+                f"{ratio} | |"
             )
     lines.append(
         row(
@@ -634,8 +646,9 @@ times are inflated). Repetitions: {reps} (median; each measurement a fresh proce
 alternate within a repetition); the whole run took {wall / 60:.1f} min.{
             ""
             if load_numpy is None
-            else " Some peers' solves were rerun after the main run (plain numpy MPI; "
-            f"pymdptoolbox VI with a fixed iteration count) at load {load_numpy[0]:.2f}."
+            else f" Rerun right after the main run (load {load_numpy[1][0]:.2f}): "
+            + ", ".join(load_numpy[0])
+            + "."
         }
 {"QUICK RUN (small instance): not the paper's numbers." if quick else ""}
 
