@@ -426,8 +426,10 @@ def _iterate_impl(
     res = np.inf
     u = v.copy()
     buf = np.empty_like(u)
+    kw: dict[str, Any] = {}
     if isinstance(rows, PostDecisionRows):
         arg = rows.new_arg()  # actions, not rows
+        kw["w"] = rows.new_work()  # reused by every sweep of this solve
     else:
         arg = np.zeros(rows.n_vars, dtype=np.int64)
     c = 0.0
@@ -435,7 +437,7 @@ def _iterate_impl(
         if game:
             lo, hi = rows._sweep_maxmin(u, buf, arg)
         else:
-            lo, hi = rows._sweep_max(u, buf, arg, nchunks)
+            lo, hi = rows._sweep_max(u, buf, arg, nchunks, **kw)
         sweeps += 1
         lo -= (1.0 - lam) * c
         hi -= (1.0 - lam) * c
@@ -450,7 +452,7 @@ def _iterate_impl(
         c = lam * c + (lam / (1.0 - lam) * 0.5 * (lo + hi) if extrapolate else 0.0)
         u, buf = buf, u
         for _ in range(eval_sweeps):
-            lo, hi = rows._sweep_policy(arg, u, buf, nchunks)
+            lo, hi = rows._sweep_policy(arg, u, buf, nchunks, **kw)
             sweeps += 1
             lo -= (1.0 - lam) * c
             hi -= (1.0 - lam) * c
@@ -606,10 +608,11 @@ def _evaluate_iterative_impl(
     nchunks = max(1, 8 * numba.get_num_threads())
     u = np.zeros(ops.n_vars)
     buf = np.empty_like(u)
+    kw: dict[str, Any] = {"w": ops.new_work()} if isinstance(ops, PostDecisionRows) else {}
     c = 0.0
     sweeps = 0
     while True:
-        lo, hi = ops._sweep_policy(sel, u, buf, nchunks)
+        lo, hi = ops._sweep_policy(sel, u, buf, nchunks, **kw)
         sweeps += 1
         lo -= (1.0 - lam) * c
         hi -= (1.0 - lam) * c

@@ -44,7 +44,7 @@ The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numba
@@ -510,7 +510,6 @@ class PostDecisionRows:
     discount: float
     reward_codes: np.ndarray | None = None
     reward_table: np.ndarray | None = None
-    _workspace: dict = field(default_factory=dict, repr=False)
 
     #: Rewards with at most this many distinct values are stored as codes into a table
     #: (uint8 up to 256 values, else uint16): 1-2 bytes instead of 8 per pair and sweep.
@@ -568,22 +567,24 @@ class PostDecisionRows:
         """``max |R_u(x)|`` over allowed pairs (disallowed rewards are stored as 0)."""
         return float(np.abs(self.reward).max(initial=0.0))
 
-    def _work(self) -> np.ndarray:
-        """The buffer for ``W`` (one per form, reused: a fresh array every sweep costs page
-        faults, 30% of the time on 33 M states). Sweeps of one form must not overlap."""
-        w = self._workspace.get("w")
-        if w is None:
-            w = self._workspace["w"] = np.empty(self.n_post)
-        return w
+    def new_work(self) -> np.ndarray:
+        """A buffer for ``W`` to pass to the sweeps: one per solve, reused by its sweeps (a
+        fresh array every sweep costs page faults, 30% of the time at 33 M states)."""
+        return np.empty(self.n_post)
 
     def new_arg(self) -> np.ndarray:
         """An array for the chosen action of every state (int8)."""
         return np.zeros(self.n_vars, dtype=np.int8)
 
     def _sweep_max(
-        self, v: np.ndarray, out: np.ndarray, arg: np.ndarray, nchunks: int
+        self,
+        v: np.ndarray,
+        out: np.ndarray,
+        arg: np.ndarray,
+        nchunks: int,
+        w: np.ndarray | None = None,
     ) -> tuple[float, float]:
-        w = self._work()
+        w = self.new_work() if w is None else w
         _kernels.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
             lo, hi = _kernels.ps_max_stats_coded(
@@ -604,9 +605,14 @@ class PostDecisionRows:
         return float(lo), float(hi)
 
     def _sweep_policy(
-        self, act: np.ndarray, v: np.ndarray, out: np.ndarray, nchunks: int
+        self,
+        act: np.ndarray,
+        v: np.ndarray,
+        out: np.ndarray,
+        nchunks: int,
+        w: np.ndarray | None = None,
     ) -> tuple[float, float]:
-        w = self._work()
+        w = self.new_work() if w is None else w
         _kernels.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
             lo, hi = _kernels.ps_policy_stats_coded(
