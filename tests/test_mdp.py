@@ -186,3 +186,26 @@ def test_to_matrices_with_disallowed_actions():
     v_masked = lb.solve_exact(mdp).values
     v_pen = lb.solve_exact(lb.FiniteMDP.from_matrices(P, R, 0.9)).values
     np.testing.assert_allclose(v_masked, v_pen, atol=1e-8)
+
+
+def test_copy_false_hands_arrays_over_without_copying():
+    succ, probs, rewards = _arrays()
+    succ = succ.astype(np.int32)
+    owned = lb.FiniteMDP(succ, probs, rewards, 0.9, copy=False)
+    assert np.shares_memory(owned.successors, succ)
+    assert np.shares_memory(owned.rewards, rewards)
+    assert not owned.successors.flags.writeable
+    copied = lb.FiniteMDP(succ.copy(), probs, rewards.copy(), 0.9)
+    assert not np.shares_memory(copied.successors, succ)
+
+
+def test_disallowed_successors_out_of_range_are_made_self_loops_on_a_copy():
+    succ, probs, rewards = _arrays()
+    succ[1, 1, :] = 99  # out of range, but the pair is disallowed: never read
+    allowed = np.ones((3, 2), bool)
+    allowed[1, 1] = False
+    given = succ.copy()
+    mdp = lb.FiniteMDP(succ, probs, rewards, 0.9, allowed)
+    np.testing.assert_array_equal(mdp.successors[1, 1], [1, 1])
+    np.testing.assert_array_equal(succ, given)  # the caller's array is untouched
+    assert mdp.rewards[1, 1] == 0.0  # disallowed rewards are stored as 0

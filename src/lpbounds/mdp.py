@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -34,6 +35,30 @@ def index_dtype(n: int) -> type[np.signedinteger[Any]]:
 def _first(mask: np.ndarray) -> tuple[int, ...]:
     """Index of the first True entry of ``mask`` as a tuple of ints."""
     return tuple(int(i) for i in np.argwhere(mask)[0])
+
+
+@numba.njit(cache=True, nogil=True)
+def _check_successors(succ, allow, n):  # pragma: no cover - compiled
+    """Out-of-range successors: (count on allowed pairs, first flat index, count elsewhere).
+
+    One pass and no temporaries (full-size boolean masks cost GBs at 33 M states).
+    """
+    n_states, n_actions, n_out = succ.shape
+    bad = 0
+    first = -1
+    bad_disallowed = 0
+    for x in range(n_states):
+        for u in range(n_actions):
+            for ll in range(n_out):
+                k = succ[x, u, ll]
+                if k < 0 or k >= n:
+                    if allow[x, u]:
+                        if first < 0:
+                            first = (x * n_actions + u) * n_out + ll
+                        bad += 1
+                    else:
+                        bad_disallowed += 1
+    return bad, first, bad_disallowed
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -66,6 +91,10 @@ class FiniteMDP:
         Default: every action is allowed everywhere.
     action_names : sequence of str, optional
         Labels of the ``A`` actions, used in reports (default ``"0", "1", ...``).
+    copy : bool
+        Copy the arrays (default). ``copy=False`` hands them over: arrays already of
+        the stored dtype are kept without a copy (and made read-only), which model
+        builders use at tens of millions of states; do not modify them afterwards.
 
     Raises
     ------
@@ -86,6 +115,8 @@ class FiniteMDP:
         discount: float,
         allowed: Any = None,
         action_names: Sequence[str] | None = None,
+        *,
+        copy: bool = True,
     ) -> None:
         succ = np.asarray(successors)
         if succ.ndim != 3:
@@ -117,15 +148,20 @@ class FiniteMDP:
             )
 
         idt = index_dtype(n)
-        succ = succ.astype(idt, copy=True)
-        bad = ((succ < 0) | (succ >= n)) & allow[:, :, None]
-        if bad.any():
-            x, u, ll = _first(bad)
+        owned = not copy and succ.dtype == idt and succ.flags.c_contiguous
+        succ = succ if owned else np.ascontiguousarray(succ, dtype=idt)
+        if succ is successors and copy:
+            succ = succ.copy()
+        n_bad, first, n_bad_disallowed = _check_successors(succ, allow, n)
+        if n_bad:
+            x, u, ll = np.unravel_index(first, succ.shape)
             raise ValidationError(
                 f"successors[{x}, {u}, {ll}] = {int(succ[x, u, ll])} is out of range "
-                f"[0, {n}) ({int(bad.sum())} such entries)"
+                f"[0, {n}) ({n_bad} such entries)"
             )
-        if not allow.all():
+        if n_bad_disallowed:  # never read, but keep every stored index in range
+            if not succ.flags.writeable:
+                succ = succ.copy()
             rows, cols = np.nonzero(~allow)
             succ[rows, cols, :] = rows[:, None].astype(idt)
 
@@ -141,7 +177,10 @@ class FiniteMDP:
                 f"rewards[{x}, {u}] = {rew[x, u]} is not finite on an allowed pair "
                 f"({int(nonfinite.sum())} such entries)"
             )
-        rew = np.where(allow, rew, 0.0)
+        if not (rew[~allow] == 0.0).all():
+            rew = np.where(allow, rew, 0.0)  # disallowed rewards are stored as 0
+        elif copy and rew is rewards:
+            rew = rew.copy()
 
         self.probabilities = _readonly(self._check_probabilities(probabilities, allow, succ.shape))
         self.successors = _readonly(succ)
@@ -380,15 +419,16 @@ class FiniteMDP:
             )
         probs = self.probabilities_full()
         mats = []
+        rows = np.repeat(np.arange(n), self.n_outcomes)
         for a in range(self.n_actions):
-            rows = np.repeat(np.arange(n), self.n_outcomes)
-            m = sp.csr_matrix(
-                (
-                    np.ascontiguousarray(probs[:, a, :]).ravel(),
-                    (rows, self.successors[:, a, :].ravel()),
-                ),
-                shape=(n, n),
-            )
+            succ_a = np.array(self.successors[:, a, :])
+            prob_a = np.array(probs[:, a, :])
+            off = ~self.allowed[:, a]
+            if off.any():  # pymdptoolbox has no masks: a disallowed pair is a self-loop
+                succ_a[off] = np.flatnonzero(off)[:, None]
+                prob_a[off] = 0.0
+                prob_a[off, 0] = 1.0
+            m = sp.csr_matrix((prob_a.ravel(), (rows, succ_a.ravel())), shape=(n, n))
             m.sum_duplicates()
             m.eliminate_zeros()
             mats.append(m)

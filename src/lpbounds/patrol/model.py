@@ -375,6 +375,8 @@ class PatrolModel:
         succ[:, 2, :] = np.arange(n, dtype=idt)[:, None]
         succ[lo, 2, :] = self._successors(l64[lo], w[lo], d[lo], tau[lo], 2)
         rewards = self.rewards(d, tau)
+        rewards[~allowed] = 0.0  # as FiniteMDP stores them, so it need not copy
+        # the arrays were made here for the MDP: hand them over (no 2-3 GB copies at m = 5)
         return FiniteMDP(
             succ,
             self.params.alert_probabilities(),
@@ -382,6 +384,7 @@ class PatrolModel:
             self.params.discount,
             allowed=allowed,
             action_names=ACTION_NAMES,
+            copy=False,
         )
 
     # ------------------------------------------------------------------ partitions
