@@ -295,18 +295,40 @@ def solve_exact(
         v, arg, res, its, sweeps, ok, hist = _iterate(
             rows, v, tol_, max_iter, m, extrapolate, callback
         )
+    return _result(
+        method, v, _policy_out(model, rows, arg), arg, res, tol_, its, sweeps, ok, hist,
+        rows.discount, t0, raise_on_failure,
+    )  # fmt: skip
+
+
+def _result(
+    method: str,
+    v: np.ndarray,
+    policy: np.ndarray,
+    policy_rows: np.ndarray,
+    res: float,
+    tol: float,
+    its: int,
+    sweeps: int,
+    ok: bool,
+    hist: list[float],
+    discount: float,
+    t0: float,
+    raise_on_failure: bool,
+) -> DPResult:
+    """The DPResult of a finished iteration, or ConvergenceError if it stopped short."""
     if not ok and raise_on_failure:
         raise ConvergenceError(
-            f"{method} stopped after {its} iterations with residual {res:.3e} > tol {tol_:.3e}; "
+            f"{method} stopped after {its} iterations with residual {res:.3e} > tol {tol:.3e}; "
             "raise max_iter or tol"
         )
     return DPResult(
         values=v,
-        policy=_policy_out(model, rows, arg),
-        policy_rows=arg,
+        policy=policy,
+        policy_rows=policy_rows,
         residual=res,
-        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), rows.discount),
-        tol=tol_,
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), discount),
+        tol=tol,
         iterations=its,
         sweeps=sweeps,
         seconds=time.perf_counter() - t0,
@@ -339,25 +361,10 @@ def _solve_post_decision(
             raise ValidationError(f"expected a vector of length {ps.n_vars}; got {v.shape}")
     m = eval_sweeps if method == "mpi" else 0
     v, act, res, its, sweeps, ok, hist = _iterate(ps, v, tol_, max_iter, m, extrapolate, callback)
-    if not ok and raise_on_failure:
-        raise ConvergenceError(
-            f"{method} stopped after {its} iterations with residual {res:.3e} > tol {tol_:.3e}; "
-            "raise max_iter or tol"
-        )
-    return DPResult(
-        values=v,
-        policy=act.astype(np.int64),
-        policy_rows=ps.rows_of(act),
-        residual=res,
-        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), ps.discount),
-        tol=tol_,
-        iterations=its,
-        sweeps=sweeps,
-        seconds=time.perf_counter() - t0,
-        method=method,
-        converged=ok,
-        history=hist,
-    )
+    return _result(
+        method, v, act.astype(np.int64), ps.rows_of(act), res, tol_, its, sweeps, ok, hist,
+        ps.discount, t0, raise_on_failure,
+    )  # fmt: skip
 
 
 #: Below this many value reads per sweep the sweeps run on one thread: a parallel region
@@ -537,24 +544,10 @@ def solve_game(
     v, arg, res, its, sweeps, ok, hist = _iterate(
         rows, v, tol_, max_iter, 0, True, callback, game=True
     )
-    if not ok and raise_on_failure:
-        raise ConvergenceError(
-            f"game value iteration stopped after {its} iterations with residual {res:.3e}"
-        )
-    return DPResult(
-        values=v,
-        policy=arg,
-        policy_rows=arg,
-        residual=res,
-        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), rows.discount),
-        tol=tol_,
-        iterations=its,
-        sweeps=sweeps,
-        seconds=time.perf_counter() - t0,
-        method="game-vi",
-        converged=ok,
-        history=hist,
-    )
+    return _result(
+        "game-vi", v, arg, arg, res, tol_, its, sweeps, ok, hist, rows.discount, t0,
+        raise_on_failure,
+    )  # fmt: skip
 
 
 # ---------------------------------------------------------------------- evaluation

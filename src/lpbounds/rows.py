@@ -260,7 +260,7 @@ class BellmanRows:
         probs = np.empty((n_rows, n_out), dtype=np.float64)
         oa = np.empty(n_rows, dtype=np.int64)
         key = np.empty(n_rows, dtype=np.uint64)
-        nchunks = max(1, 8 * numba.get_num_threads())
+        nchunks = _nchunks()
         _aggregate.canonical_rows(
             labels, exact.owner, exact.action, exact.targets, exact.probs, mdp.n_actions,
             owner, targets, probs, oa, key, nchunks,
@@ -330,16 +330,7 @@ class BellmanRows:
         """``(Tv)(i) = max_{r of i} q_r(v)`` and the first maximising row of each owner."""
         out = np.empty(self.n_vars)
         arg = np.empty(self.n_vars, dtype=np.int64)
-        _kernels.bellman_max(
-            self.indptr,
-            self.reward,
-            self.targets,
-            self.probs,
-            self.discount,
-            self._vec(v),
-            out,
-            arg,
-        )
+        self._sweep_max(self._vec(v), out, arg, _nchunks())
         return out, arg
 
     def apply_maxmin(self, v: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -395,14 +386,8 @@ class BellmanRows:
     def evaluate_rows(self, rows: np.ndarray, v: Any) -> np.ndarray:
         """One policy-evaluation sweep: ``out[i] = q_{rows[i]}(v)``."""
         out = np.empty(self.n_vars)
-        _kernels.policy_sweep(
-            np.ascontiguousarray(rows, dtype=np.int64),
-            self.reward,
-            self.targets,
-            self.probs,
-            self.discount,
-            self._vec(v),
-            out,
+        self._sweep_policy(
+            np.ascontiguousarray(rows, dtype=np.int64), self._vec(v), out, _nchunks()
         )
         return out
 
@@ -674,6 +659,11 @@ def _reward_codes(
     if count <= 256:
         codes = codes.astype(np.uint8)
     return codes, table[:count].copy()
+
+
+def _nchunks() -> int:
+    """Work chunks of the sweep kernels: a few per thread, for load balance."""
+    return max(1, 8 * numba.get_num_threads())
 
 
 def _group_rows(
