@@ -224,9 +224,9 @@ def main() -> None:
     lines = [
         "## LP formulations (benchmarks/bench_formulations.py)",
         "",
-        f"Run {dt.datetime.now().astimezone():%Y-%m-%d %H:%M %Z} on {machine()}. The machine "
-        "is shared with other engineers working at the same time, so wall times carry "
-        "their load (load averages below; above 2 means every step waited for a core).",
+        f"Run {dt.datetime.now().astimezone():%Y-%m-%d %H:%M %Z} on {machine()}. Wall times "
+        "carry whatever else ran on the machine: the load averages are given at the end "
+        "(2 cores: above 2 means every step waited for a core).",
         "",
     ]
     lines += bench_aggregate()
