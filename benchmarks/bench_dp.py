@@ -43,10 +43,12 @@ def main() -> None:
     n = args.n
     builds = [run_isolated(BUILD.format(n=n)) for _ in range(args.repeat)]
     rows = []
+    best = (float("inf"), "")
     base_rss = statistics.median(b["peak_rss_mb"] for b in builds)
     for method in ("mpi", "vi", "pi"):
         runs = [run_isolated(SOLVE.format(n=n, method=method)) for _ in range(args.repeat)]
         med = statistics.median(r["seconds"] for r in runs)
+        best = min(best, (med, method))
         r0 = runs[0]
         peak = max(r["peak_rss_mb"] for r in runs)
         rows.append(
