@@ -35,6 +35,7 @@ the plain path.
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -394,21 +395,19 @@ def _threads_for(ops: BellmanRows | PostDecisionRows) -> Iterator[None]:
             numba.set_num_threads(before)
 
 
+def _serial_if_small(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Run ``func(rows, ...)`` with the thread count :func:`_threads_for` picks for ``rows``."""
+
+    @functools.wraps(func)
+    def wrapper(rows: Any, *args: Any, **kwargs: Any) -> Any:
+        with _threads_for(rows):
+            return func(rows, *args, **kwargs)
+
+    return wrapper
+
+
+@_serial_if_small
 def _iterate(
-    rows: BellmanRows | PostDecisionRows,
-    v: np.ndarray,
-    tol: float,
-    max_iter: int,
-    eval_sweeps: int,
-    extrapolate: bool,
-    callback: Callback | None,
-    game: bool = False,
-) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
-    with _threads_for(rows):
-        return _iterate_impl(rows, v, tol, max_iter, eval_sweeps, extrapolate, callback, game)
-
-
-def _iterate_impl(
     rows: BellmanRows | PostDecisionRows,
     v: np.ndarray,
     tol: float,

@@ -315,34 +315,10 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
         markdown_table(
             ["inequality", "margin min(rhs - lhs)", "tolerance", "violations", "worst state"],
             [
-                [
-                    "w*(i) <= V*(x)",
-                    sw["lower"]["margin"],
-                    sw["lower"]["tolerance"],
-                    sw["lower"]["violations"],
-                    _st(sw["lower"]["worst_state"]),
-                ],
-                [
-                    "V*(x) <= v*(i)",
-                    sw["upper"]["margin"],
-                    sw["upper"]["tolerance"],
-                    sw["upper"]["violations"],
-                    _st(sw["upper"]["worst_state"]),
-                ],
-                [
-                    "V_low <= V_sub",
-                    ch4["vlow_le_vsub"]["margin"],
-                    ch4["vlow_le_vsub"]["tolerance"],
-                    ch4["vlow_le_vsub"]["violations"],
-                    _st(ch4["vlow_le_vsub"]["worst_state"]),
-                ],
-                [
-                    "V_sub <= V*",
-                    ch4["vsub_le_vstar"]["margin"],
-                    ch4["vsub_le_vstar"]["tolerance"],
-                    ch4["vsub_le_vstar"]["violations"],
-                    _st(ch4["vsub_le_vstar"]["worst_state"]),
-                ],
+                _inequality_row("w*(i) <= V*(x)", sw["lower"]),
+                _inequality_row("V*(x) <= v*(i)", sw["upper"]),
+                _inequality_row("V_low <= V_sub", ch4["vlow_le_vsub"]),
+                _inequality_row("V_sub <= V*", ch4["vsub_le_vstar"]),
             ],
         )
     )
@@ -455,6 +431,17 @@ def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Pa
     add("")
     path.write_text("\n".join(L) + "\n")
     return path
+
+
+def _inequality_row(label: str, check: dict[str, Any]) -> list[Any]:
+    """One row of the sandwich table: margin, tolerance, violations, worst state."""
+    return [
+        label,
+        check["margin"],
+        check["tolerance"],
+        check["violations"],
+        _st(check["worst_state"]),
+    ]
 
 
 def _st(d: dict[str, Any]) -> str:
