@@ -49,7 +49,7 @@ import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError, ValidationError
 from .mdp import FiniteMDP
-from .rows import BellmanRows, PostDecisionRows
+from .rows import BellmanRows, PostDecisionRows, _nchunks
 from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
 
 __all__ = [
@@ -406,6 +406,22 @@ def _serial_if_small(func: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
+def _offset_step(
+    lam: float, c: float, lo: float, hi: float, extrapolate: bool
+) -> tuple[float, float, float]:
+    """The Porteus offset algebra of an iterate ``v = u + c``, shared by every sweep loop.
+
+    Given the extremes ``lo, hi`` of ``T u - u`` (``T`` a max, game or fixed-policy
+    operator), return the extremes of ``T v - v = (T u - u) - (1 - lambda) c`` and the
+    offset after the sweep: ``T v = T u + lambda c``, plus the shift
+    ``lambda / (1 - lambda)`` times the residual's midpoint when extrapolating.
+    """
+    lo -= (1.0 - lam) * c
+    hi -= (1.0 - lam) * c
+    c_next = lam * c + (lam / (1.0 - lam) * 0.5 * (lo + hi) if extrapolate else 0.0)
+    return lo, hi, c_next
+
+
 @_serial_if_small
 def _iterate(
     rows: BellmanRows | PostDecisionRows,
@@ -426,7 +442,7 @@ def _iterate(
     updates ``c``. ``u + c`` is formed once, at the end.
     """
     lam = rows.discount
-    nchunks = max(1, 8 * numba.get_num_threads())
+    nchunks = _nchunks()
     sweeps = 0
     hist: list[float] = []
     res = np.inf
@@ -445,8 +461,7 @@ def _iterate(
         else:
             lo, hi = rows._sweep_max(u, buf, arg, nchunks, **kw)
         sweeps += 1
-        lo -= (1.0 - lam) * c
-        hi -= (1.0 - lam) * c
+        lo, hi, c_next = _offset_step(lam, c, lo, hi, extrapolate)
         res = max(-lo, hi)
         hist.append(res)
         if callback is not None:
@@ -455,14 +470,12 @@ def _iterate(
             return u + c, arg, res, it, sweeps, True, hist
         if it == max_iter:
             break
-        c = lam * c + (lam / (1.0 - lam) * 0.5 * (lo + hi) if extrapolate else 0.0)
+        c = c_next
         u, buf = buf, u
         for _ in range(eval_sweeps):
             lo, hi = rows._sweep_policy(arg, u, buf, nchunks, **kw)
             sweeps += 1
-            lo -= (1.0 - lam) * c
-            hi -= (1.0 - lam) * c
-            c = lam * c + (lam / (1.0 - lam) * 0.5 * (lo + hi) if extrapolate else 0.0)
+            _, _, c = _offset_step(lam, c, lo, hi, extrapolate)
             u, buf = buf, u
     return u + c, arg, res, max_iter, sweeps, False, hist
 
@@ -580,6 +593,7 @@ def _evaluate_rows(
     )
 
 
+@_serial_if_small
 def _evaluate_iterative(
     ops: BellmanRows | PostDecisionRows, sel: np.ndarray, tol: float, max_sweeps: int
 ) -> tuple[np.ndarray, int]:
@@ -589,15 +603,8 @@ def _evaluate_iterative(
     is ``u + c``; ``T_pi(u + c) - (u + c) = (T_pi u - u) - (1 - lambda) c``. ``sel`` is
     rows (BellmanRows) or actions (PostDecisionRows).
     """
-    with _threads_for(ops):
-        return _evaluate_iterative_impl(ops, sel, tol, max_sweeps)
-
-
-def _evaluate_iterative_impl(
-    ops: BellmanRows | PostDecisionRows, sel: np.ndarray, tol: float, max_sweeps: int
-) -> tuple[np.ndarray, int]:
     lam = ops.discount
-    nchunks = max(1, 8 * numba.get_num_threads())
+    nchunks = _nchunks()
     u = np.zeros(ops.n_vars)
     buf = np.empty_like(u)
     kw: dict[str, Any] = {"w": ops.new_work()} if isinstance(ops, PostDecisionRows) else {}
@@ -606,11 +613,10 @@ def _evaluate_iterative_impl(
     while True:
         lo, hi = ops._sweep_policy(sel, u, buf, nchunks, **kw)
         sweeps += 1
-        lo -= (1.0 - lam) * c
-        hi -= (1.0 - lam) * c
+        lo, hi, c_next = _offset_step(lam, c, lo, hi, True)
         if max(-lo, hi) <= tol or sweeps >= max_sweeps:
             return u + c, sweeps
-        c = lam * c + lam / (1.0 - lam) * 0.5 * (lo + hi)
+        c = c_next
         u, buf = buf, u
 
 
@@ -633,7 +639,7 @@ def _evaluate_post_decision(
     act = pol.astype(np.int8)
     v, sweeps = _evaluate_iterative(ps, act, tol, 1_000_000)
     out = np.empty_like(v)
-    nchunks = max(1, 8 * numba.get_num_threads())
+    nchunks = _nchunks()
     lo, hi = ps._sweep_policy(act, v, out, nchunks)  # measured on the returned vector
     res = max(-lo, hi)
     if res > tol:
@@ -705,7 +711,7 @@ def bellman_residual(model: Model, values: Any) -> float:
         if v.shape != (ps.n_vars,):
             raise ValidationError(f"expected a vector of length {ps.n_vars}; got {v.shape}")
         out = np.empty_like(v)
-        lo, hi = ps._sweep_max(v, out, ps.new_arg(), max(1, 8 * numba.get_num_threads()))
+        lo, hi = ps._sweep_max(v, out, ps.new_arg(), _nchunks())
         return max(-lo, hi)
     rows = exact_rows(model)
     v = rows._vec(values)

@@ -61,7 +61,7 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from ..dp import solve_exact, solve_game
+from ..dp import _threads_for, solve_exact, solve_game
 from ..errors import ConvergenceError, SolverError, ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
@@ -385,7 +385,7 @@ class NLP:
         if max_iter is not None and max_iter < 1:
             raise ValidationError(f"max_iter must be >= 1; got {max_iter}")
         t0 = time.perf_counter()
-        with _progress_bar(progress, method, max_iter) as tick, _serial_kernels(self.rows.n_rows):
+        with _progress_bar(progress, method, max_iter) as tick, _threads_for(self.rows):
             if method == "cutting-planes":
                 out = self._cutting_planes(
                     solver,
@@ -686,28 +686,6 @@ class NLPMILP:
             )
             cons.append(s @ self.z == 1)
         self.problem = cp.Problem(cp.Minimize(nlp.cost @ self.w), cons)
-
-
-#: Below this many rows the numba kernels run on one thread: a parallel launch costs about
-#: 20 ms on a loaded 2-core machine (measured), far more than the work on a small system,
-#: and the cutting planes and strategy iteration call them thousands of times.
-_SERIAL_BELOW_ROWS = 200_000
-
-
-@contextmanager
-def _serial_kernels(n_rows: int) -> Iterator[None]:
-    """Run numba's parallel kernels on one thread (this thread only) for small systems."""
-    import numba
-
-    if n_rows >= _SERIAL_BELOW_ROWS:
-        yield
-        return
-    old = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(old)
 
 
 @contextmanager
