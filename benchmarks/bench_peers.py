@@ -39,6 +39,22 @@ def build():
     return mdp, time.perf_counter() - t
 def target(mdp):
     return 1e-10 * mdp.reward_absmax / (1 - mdp.discount)
+def mdpsolver_model(mdp):
+    # mdpsolver takes nested lists (sparse form: probabilities and columns per pair); it
+    # has no action masks, so disallowed pairs get reward -1e4. Returns the model and the
+    # seconds spent converting and loading.
+    import mdpsolver
+    P, R = mdp.to_matrices(disallowed_reward=-1e4)
+    del P
+    t = time.perf_counter()
+    probs = np.broadcast_to(mdp.probabilities, mdp.successors.shape).tolist()
+    cols = mdp.successors.tolist()
+    rew = R.tolist()
+    tc = time.perf_counter() - t
+    t = time.perf_counter()
+    m = mdpsolver.model()
+    m.mdp(discount=mdp.discount, rewards=rew, tranMatProbs=probs, tranMatColumns=cols)
+    return m, tc, time.perf_counter() - t
 def pymdp_patched():
     # pymdptoolbox's input check densifies each transition matrix (n x n float64:
     # 30 TiB here) and ValueIteration._boundIter loops over the n columns in Python;
@@ -59,19 +75,8 @@ print(json.dumps({"seconds": tb, "n": mdp.n_states, "pairs": mdp.n_pairs}))
 """
 
 BUILD_MS = """
-import mdpsolver
 mdp, tb = build()
-P, R = mdp.to_matrices(disallowed_reward=-1e4)
-del P
-t = time.perf_counter()
-probs = np.broadcast_to(mdp.probabilities, mdp.successors.shape).tolist()
-cols = mdp.successors.tolist()
-rew = R.tolist()
-tc = time.perf_counter() - t
-t = time.perf_counter()
-m = mdpsolver.model()
-m.mdp(discount=mdp.discount, rewards=rew, tranMatProbs=probs, tranMatColumns=cols)
-tl = time.perf_counter() - t
+m, tc, tl = mdpsolver_model(mdp)
 print(json.dumps({"seconds": tb + tc + tl, "build": tb, "convert": tc, "load": tl}))
 """
 
@@ -95,18 +100,9 @@ print(json.dumps({{"seconds": ts, "e2e": tb + ts, "residual": res, "tol": target
 """
 
 SOLVE_MS = """
-import mdpsolver
 mdp, tb = build()
-P, R = mdp.to_matrices(disallowed_reward=-1e4)
-del P
-t = time.perf_counter()
-probs = np.broadcast_to(mdp.probabilities, mdp.successors.shape).tolist()
-cols = mdp.successors.tolist()
-rew = R.tolist()
-m = mdpsolver.model()
-m.mdp(discount=mdp.discount, rewards=rew, tranMatProbs=probs, tranMatColumns=cols)
-del probs, cols, rew
-tin = time.perf_counter() - t
+m, tc, tl = mdpsolver_model(mdp)
+tin = tc + tl
 t = time.perf_counter()
 m.solve(algorithm="{method}", tolerance=target(mdp), parallel=True, verbose=False)
 v = np.array(m.getValueVector())
