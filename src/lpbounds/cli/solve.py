@@ -34,7 +34,6 @@ def run(args: argparse.Namespace) -> int:
         build = time.perf_counter() - t0
         prog.update(task, description=f"solving {inst.name} ({args.method})")
 
-        # expected number of improvement steps to shrink the residual from max|R| to tol
         def cb(it: int, res: float) -> None:
             prog.update(task, completed=it, status=f"iteration {it}  residual {res:.2e}")
 
