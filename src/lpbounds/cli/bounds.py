@@ -72,15 +72,15 @@ def run(args: argparse.Namespace) -> int:
     t_all = time.perf_counter()
     if args.lp and args.no_lp:
         raise ValidationError("--lp and --no-lp contradict each other")
-    args.no_lp = args.no_lp or (not args.lp and params.n_partitions > args.lp_max_partitions)
-    out["lp_solved"] = not args.no_lp
-    if args.no_lp and not args.lp:
+    solve_lp = not args.no_lp and (args.lp or params.n_partitions <= args.lp_max_partitions)
+    out["lp_solved"] = solve_lp
+    if not solve_lp:
         out["lp_note"] = (
             f"LP not solved (M = {params.n_partitions} > --lp-max-partitions "
             f"{args.lp_max_partitions}, or --no-lp): the fixed points are the LPs' exact optima"
         )
     with progress() as prog:
-        steps = 4 + (0 if args.no_lp else 2)
+        steps = 4 + (2 if solve_lp else 0)
         task = prog.add_task(f"bounds of {inst.name}", total=steps, status="")
         values: dict[str, np.ndarray] = {}
         for cls in (UBLP, LBLP):
@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
                 },
             }
             prog.advance(task)
-            if not args.no_lp:
+            if solve_lp:
                 prog.update(task, description=f"{cls.name}: LP ({args.solver})")
                 t0 = time.perf_counter()
                 res = lp.solve(args.solver)
