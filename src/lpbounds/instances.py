@@ -28,6 +28,7 @@ import importlib
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +41,15 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["MODEL_KINDS", "PARTITION_KINDS", "Instance", "load_instance", "models_dir"]
+__all__ = [
+    "MODEL_KINDS",
+    "PARTITION_KINDS",
+    "Instance",
+    "load_instance",
+    "models_dir",
+    "packaged_models_dir",
+    "resolve_instance_path",
+]
 
 #: kind -> "module:function(config: dict) -> FiniteMDP"
 MODEL_KINDS: dict[str, str] = {
@@ -55,11 +64,54 @@ PARTITION_KINDS: dict[str, str] = {
 
 
 def models_dir() -> Path:
-    """The ``models/`` folder: ``./models`` if it exists, else the repository's."""
+    """The ``models/`` folder: ``./models`` if it exists, else the one shipped in the package.
+
+    The instance files are package data (``lpbounds/models/*.toml``, read through
+    :mod:`importlib.resources`), so a non-editable install finds them from any directory;
+    the repository's top-level ``models`` is a link to the same folder.
+    """
     here = Path.cwd() / "models"
     if here.is_dir():
         return here
-    return Path(__file__).resolve().parents[2] / "models"
+    return packaged_models_dir()
+
+
+def packaged_models_dir() -> Path:
+    """The folder of the instance files shipped inside the installed package."""
+    return Path(str(resources.files("lpbounds") / "models"))
+
+
+def resolve_instance_path(source: str | Path) -> Path:
+    """The TOML file a MODEL argument names: an existing file first, then a packaged name.
+
+    ``"garnet-small"``, ``"garnet-small.toml"`` and ``"models/garnet-small.toml"`` all name
+    the packaged ``garnet-small.toml`` when no such file exists relative to the working
+    directory (``./models`` is searched before the package's folder), so the README's
+    commands work from any directory after ``pip install``.
+
+    Raises
+    ------
+    ValidationError
+        The path is a directory, or names no file and no packaged model (the message lists
+        the packaged names).
+    """
+    path = Path(source)
+    if path.is_file():
+        return path
+    if path.is_dir():
+        raise ValidationError(f"model {str(source)!r} is a directory, not an instance file")
+    bare = len(path.parts) == 1 or (len(path.parts) == 2 and path.parts[0] == "models")
+    if bare and path.suffix in ("", ".toml"):
+        stem = path.name[: -len(".toml")] if path.suffix == ".toml" else path.name
+        for folder in dict.fromkeys((models_dir(), packaged_models_dir())):
+            candidate = folder / f"{stem}.toml"
+            if candidate.is_file():
+                return candidate
+    known = sorted(p.stem for p in packaged_models_dir().glob("*.toml"))
+    raise ValidationError(
+        f"no instance file {str(source)!r}, and no packaged model of that name; "
+        f"packaged models: {known}"
+    )
 
 
 def _resolve(spec: str) -> Callable[..., Any]:
@@ -130,8 +182,9 @@ def load_instance(source: str | Path | Mapping[str, Any], name: str | None = Non
     Parameters
     ----------
     source : path, name or mapping
-        ``"models/garnet-small.toml"``, ``"garnet-small"`` (looked up in
-        :func:`models_dir`), or the parsed tables.
+        ``"models/garnet-small.toml"``, ``"garnet-small"`` (resolved by
+        :func:`resolve_instance_path`: a file first, then a packaged model), or the
+        parsed tables.
     name : str, optional
         Display name (default: the file's stem).
     """
@@ -139,13 +192,7 @@ def load_instance(source: str | Path | Mapping[str, Any], name: str | None = Non
     if isinstance(source, Mapping):
         config = dict(source)
     else:
-        path = Path(source)
-        if not path.exists() and not path.suffix:
-            candidate = models_dir() / f"{path.name}.toml"
-            if candidate.exists():
-                path = candidate
-        if not path.exists():
-            raise ValidationError(f"no instance file {str(source)!r} (nor in {models_dir()})")
+        path = resolve_instance_path(source)
         try:
             with path.open("rb") as fh:
                 config = tomllib.load(fh)
