@@ -41,18 +41,30 @@ def test_theorem_1_on_random_mdps_and_costs(n, n_act, seed, data):
     assert (res.state_values - reference_solve(mdp)).min() >= -tol, "Phi v* must be >= V*"
 
 
-def test_residual_and_status_are_checked_by_lpbounds():
+def test_status_comes_from_the_certificate_not_the_solver():
     mdp = lb.garnet(20, 2, 2, 0.9, seed=1)
     form = ELP(mdp)
-    res = form.solve("SCS", residual_rtol=1e-14, raise_on_failure=False)
-    assert res.status.value == "residual_too_large", "SCS's 1e-4 point must not pass 1e-14"
-    assert res.primal_residual > res.residual_tol
+    # an accuracy no floating-point point can meet: the certificate says INACCURATE,
+    # whatever the solver claimed, and the bracket is still returned
+    res = form.solve("SCS", accuracy=1e-300, raise_on_failure=False)
+    assert res.status.value == "inaccurate"
+    assert res.certificate is not None and res.certificate.residual > res.residual_tol
     assert res.primal_residual == pytest.approx(max(0.0, (form.b - form.A @ res.x).max()))
-    with pytest.raises(SolverError, match="residual"):
-        form.solve("SCS", residual_rtol=1e-14)
+    vstar = reference_solve(mdp)
+    ref_err = 1e-13 * max(1.0, np.abs(vstar).max()) / (1 - mdp.discount)  # VI's own stop
+    assert (res.lower_values <= vstar + ref_err).all()
+    assert (res.upper_values >= vstar - ref_err).all()
+    with pytest.raises(SolverError, match="certified error"):
+        form.solve("SCS", accuracy=1e-300)
     ok = form.solve("HIGHS")
-    assert ok.ok and ok.primal_residual <= ok.residual_tol
+    assert ok.ok and ok.certificate is not None and ok.certificate.residual <= ok.residual_tol
     assert ok.compile_seconds >= 0 and ok.solve_seconds >= 0 and ok.solver == "HIGHS"
+
+
+@pytest.mark.parametrize("accuracy", [0, -1e-6, float("nan"), float("inf"), "abc", True, None])
+def test_accuracy_must_be_a_positive_number(accuracy):
+    with pytest.raises(ValidationError, match="accuracy"):
+        ELP(lb.garnet(4, 2, 2, 0.9, seed=1)).solve("HIGHS", accuracy=accuracy)
 
 
 def test_bad_input():

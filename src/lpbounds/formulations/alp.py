@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from ..certificate import Certificate, certify
 from ..dp import exact_rows
 from ..errors import ValidationError
 from ..mdp import FiniteMDP
@@ -66,7 +67,13 @@ class ALP(Formulation):
     Notes
     -----
     Result: ``values`` is ``r``, ``state_values`` is ``Phi r``, ``mu`` the duals per
-    (state, action).
+    (state, action). The ALP's optimum has no solver-free counterpart, so its certificate
+    is on ``V*`` itself, per state: ``upper_values = Phi r + max(0, max(T(Phi r) - Phi r))
+    / (1 - lambda)`` (rounded up) is a certified upper bound on ``V*`` whatever the solver
+    returned (a feasible ``Phi r`` is its own bound, up to rounding), and ``lower_values``
+    the matching lower bound from :func:`lpbounds.certificate.certify`. The status judges
+    only the upper side: OPTIMAL when ``upper_values`` is within ``accuracy`` (relative to
+    ``max|R| / (1 - lambda)``) of ``Phi r``.
     """
 
     name = "ALP"
@@ -81,6 +88,18 @@ class ALP(Formulation):
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         return x, np.asarray(self.basis @ x).ravel(), self.rows.pair_values(y), {}
+
+    def _certify(self, x: np.ndarray) -> Certificate:
+        """The bracket on ``V*`` from the state values ``Phi r`` (see the class notes)."""
+        return certify(self.rows, np.asarray(self.basis @ x).ravel())
+
+    def _bracket(
+        self, cert: Certificate
+    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
+        return cert.lower, cert.upper, None
+
+    def _accurate(self, cert: Certificate, accuracy: float) -> bool:
+        return cert.residual_up <= accuracy * cert.reward_absmax
 
 
 def soft_aggregation_basis(n_states: int, n_features: int, seed: int | None = 0) -> np.ndarray:

@@ -1,15 +1,21 @@
-r"""The base of every LP formulation: data ``min c'x s.t. A x >= b`` -> cvxpy -> result.
+r"""The base of every LP formulation: data ``min c'x s.t. A x >= b`` -> cvxpy -> certified result.
 
 Following cvxpy's split of building data, calling the solver and mapping the result
 back, a :class:`Formulation` is built from sparse data ``(A, b, c)`` (one vector
 constraint ``A @ x >= b``, never one Python constraint per row), exposes the cvxpy
 problem as :attr:`Formulation.problem`, and :meth:`Formulation.solve` returns an
-:class:`LPResult` whose every number lpbounds checks itself:
+:class:`LPResult` whose every number lpbounds computes itself from the returned point:
 
-* ``primal_residual = max_r (b - A x)_r^+`` on the returned ``x`` (not the solver's
-  claim); the solve fails unless it is at most ``residual_rtol * max(1, ||b||_inf)``;
-* ``dual_residual = ||A' y - c||_inf`` and ``gap = |c'x - b'y|`` for the returned
-  duals ``y >= 0`` (cvxpy's sign convention for ``>=`` rows), reported beside it.
+* the **certificate** (:mod:`lpbounds.certificate`): for an LP of Bellman rows (ELP,
+  RLP, SLP, IB, UBLP, LBLP) a bracket ``lower_values <= exact optimum <= upper_values``
+  that holds in floating point, whatever the solver claimed, and the bracket on the
+  exact optimal objective; the **status** is decided from it
+  (:class:`~lpbounds.status.Status`: OPTIMAL when the certified error is within
+  ``accuracy`` relative to ``max|R| / (1 - lambda)``, INACCURATE with its still valid
+  bracket otherwise);
+* ``primal_residual = max_r (b - A x)_r^+``, ``dual_residual = ||A' y - c||_inf`` and
+  ``gap = |c'x - b'y|`` for the returned duals ``y >= 0`` (cvxpy's sign convention for
+  ``>=`` rows), reported beside it.
 
 Sign conventions: ``y_r >= 0`` is the multiplier of row ``r`` of ``A x >= b``; at an
 optimum ``A' y = c`` (stationarity), ``y' (A x - b) = 0`` (complementarity). For Bellman
@@ -20,15 +26,16 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from enum import Enum
 from typing import Any
 
 import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
+from ..certificate import Certificate
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
-from ..tolerances import LP_RESIDUAL_RTOL
+from ..status import Status
+from ..tolerances import LP_CERT_RTOL
 
 __all__ = [
     "Formulation",
@@ -39,20 +46,6 @@ __all__ = [
     "installed_lp_solvers",
     "resolve_solver",
 ]
-
-
-class Status(str, Enum):
-    """Outcome of a solve, as lpbounds judges it."""
-
-    OPTIMAL = "optimal"
-    INACCURATE = "optimal_inaccurate"
-    INFEASIBLE = "infeasible"
-    UNBOUNDED = "unbounded"
-    RESIDUAL_TOO_LARGE = "residual_too_large"
-    SOLVER_ERROR = "solver_error"
-
-    def __str__(self) -> str:
-        return self.value
 
 
 #: Install command of each solver lpbounds knows how to name.
@@ -173,15 +166,30 @@ class LPResult:
     formulation : str
         "ELP", "RLP", "SLP", "IB", "LLP", "ALP", "UBLP", "LBLP", ...
     status : Status
+        Decided from the certificate (see the module docstring), not the solver's claim.
     objective : float
         ``c'x`` at the returned point (computed by lpbounds).
     x : ndarray
         The full primal vector of the LP.
     values : ndarray
         The value variables: per state for ELP, per partition for RLP/SLP/UBLP/LBLP,
-        ``v_1`` for IB (all blocks in ``blocks``), the weights ``r`` for ALP.
+        ``v_1`` for IB (all blocks in ``extra["blocks"]``), the weights ``r`` for ALP.
     state_values : ndarray or None
         ``Phi v`` per state, where the formulation has a state space.
+    lower_values, upper_values : ndarray or None
+        The certified bracket, valid in floating point. For a Bellman-row LP: on the LP's
+        exact optimum, entry by entry like ``values`` (RLP/UBLP: ``partition.lift(
+        upper_values) >= V*``; ELP: ``lower_values <= V* <= upper_values``; LBLP:
+        ``lower_values(i) <= min_{x in S_i} V*(x)``). For ALP (no solver-free optimum): per
+        state, on ``V*`` itself (``upper_values = Phi r + max(0, max(T Phi r - Phi r)) /
+        (1 - lambda)``, rounded up). For LLP: on RLP's ``v*``. ``None`` when the formulation
+        has no certificate (the cutting-plane loop's internal LPs).
+    error_bound : float
+        ``max |values - exact optimum|`` bound from the certificate (``inf`` without one).
+    objective_bracket : tuple of float or None
+        Certified ``[lo, hi]`` containing the LP's exact optimal objective (Bellman-row LPs).
+    certificate : Certificate or None
+        The full certificate (residuals, rounding margin, contraction modulus).
     duals : ndarray
         ``y >= 0``, one per row of ``A x >= b``.
     mu : ndarray or None
@@ -194,13 +202,17 @@ class LPResult:
     primal_residual : float
         ``max (b - A x)^+``, computed here.
     residual_tol : float
-        The tolerance ``primal_residual`` was checked against (absolute).
+        The absolute threshold the status was decided with: ``accuracy * max|R|`` on the
+        certificate's Bellman residual (``accuracy * max|b|`` on ``primal_residual`` for
+        an LP without a certificate).
+    accuracy : float
+        The requested relative accuracy.
     dual_residual : float
         ``||A'y - c||_inf``.
     gap : float
         ``|c'x - b'y|``.
     extra : dict
-        Formulation-specific data (e.g. IB's blocks).
+        Formulation-specific data (e.g. IB's blocks); ``extra["message"]`` on failure.
     """
 
     formulation: str
@@ -220,17 +232,30 @@ class LPResult:
     residual_tol: float
     dual_residual: float
     gap: float
+    lower_values: np.ndarray | None = None
+    upper_values: np.ndarray | None = None
+    error_bound: float = float("inf")
+    objective_bracket: tuple[float, float] | None = None
+    certificate: Certificate | None = None
+    accuracy: float = LP_CERT_RTOL
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
-        """True when the status is OPTIMAL (residual within tolerance)."""
+        """True when the status is OPTIMAL (certified error within the requested accuracy)."""
         return self.status is Status.OPTIMAL
 
+    @property
+    def relative_error(self) -> float:
+        """The certified error relative to ``max|R| / (1 - lambda)`` (``inf`` without one)."""
+        return self.certificate.relative_error() if self.certificate is not None else float("inf")
 
+
+#: cvxpy's statuses in lpbounds' vocabulary, before the certificate has its say.
 _STATUS = {
     cp.OPTIMAL: Status.OPTIMAL,
     cp.OPTIMAL_INACCURATE: Status.INACCURATE,
+    cp.USER_LIMIT: Status.LIMIT,
     cp.INFEASIBLE: Status.INFEASIBLE,
     cp.INFEASIBLE_INACCURATE: Status.INFEASIBLE,
     cp.UNBOUNDED: Status.UNBOUNDED,
@@ -238,11 +263,38 @@ _STATUS = {
 }
 
 
-class Formulation:
-    r"""``min c'x  s.t.  A x >= b`` as a cvxpy problem, with honest result checks.
+def _check_accuracy(accuracy: Any) -> float:
+    if isinstance(accuracy, (bool, np.bool_)) or not isinstance(
+        accuracy, (int, float, np.integer, np.floating)
+    ):
+        raise ValidationError(f"accuracy must be a positive number; got {accuracy!r}")
+    acc = float(accuracy)
+    if not (np.isfinite(acc) and acc > 0):
+        raise ValidationError(f"accuracy must be a positive finite number; got {accuracy!r}")
+    return acc
 
-    Subclasses compute ``(A, b, c)`` from the model and override :meth:`_interpret`
-    to map ``x`` and the duals back to values, state values and ``mu``.
+
+@dataclass
+class _Run:
+    """What one call of the solver returned, before lpbounds judges it."""
+
+    solver: str
+    options: dict[str, Any]
+    status: Status
+    message: str
+    x: np.ndarray | None
+    y: np.ndarray | None
+    compile_seconds: float
+    solve_seconds: float
+    iterations: int | None
+
+
+class Formulation:
+    r"""``min c'x  s.t.  A x >= b`` as a cvxpy problem, with certified results.
+
+    Subclasses compute ``(A, b, c)`` from the model, override :meth:`_interpret` to map
+    ``x`` and the duals back to values, state values and ``mu``, and :meth:`_certify` /
+    :meth:`_bracket` to certify the returned point.
 
     Parameters
     ----------
@@ -277,23 +329,41 @@ class Formulation:
         """``(values, state_values, mu, extra)`` from the primal ``x`` and duals ``y``."""
         return x, None, None, {}
 
+    def _certify(self, x: np.ndarray) -> Certificate | None:
+        """The certificate of the point ``x`` (``None``: this LP has no certificate)."""
+        return None
+
+    def _bracket(
+        self, cert: Certificate
+    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
+        """``(lower_values, upper_values, objective_bracket)`` from the certificate."""
+        return cert.lower, cert.upper, cert.objective_bracket(self.c)
+
+    def _accurate(self, cert: Certificate, accuracy: float) -> bool:
+        """Whether the certified error is within ``accuracy`` (relative to the problem's scale)."""
+        return cert.is_accurate(accuracy)
+
+    # ------------------------------------------------------------------ solve
     def solve(
         self,
         solver: str = "HIGHS",
         *,
-        residual_rtol: float = LP_RESIDUAL_RTOL,
+        accuracy: float = LP_CERT_RTOL,
         raise_on_failure: bool = True,
         verbose: bool = False,
         **solver_options: Any,
     ) -> LPResult:
-        """Solve with ``solver`` (any installed cvxpy LP solver) and check the result.
+        """Solve with ``solver`` (any installed cvxpy LP solver) and certify the result.
 
         Parameters
         ----------
         solver : str
             "HIGHS" (default), "CLARABEL", "SCIPY", "GLPK", "ECOS", "SCS", ...
-        residual_rtol : float
-            The primal residual must be at most ``residual_rtol * max(1, ||b||_inf)``.
+        accuracy : float
+            Requested relative accuracy: the status is OPTIMAL when the certified error
+            of the returned point is within ``accuracy * max|R| / (1 - lambda)`` (default
+            :data:`~lpbounds.tolerances.LP_CERT_RTOL`); a less accurate point is
+            INACCURATE and keeps its (valid, wider) bracket.
         raise_on_failure : bool
             Raise :class:`~lpbounds.errors.SolverError` unless the result is OPTIMAL
             (default); otherwise return it with its status.
@@ -309,42 +379,81 @@ class Formulation:
         -------
         LPResult
         """
-        name = resolve_solver(solver)
+        acc = _check_accuracy(accuracy)
+        if not isinstance(raise_on_failure, (bool, np.bool_)):
+            raise ValidationError(
+                f"raise_on_failure must be True or False; got {raise_on_failure!r}"
+            )
+        run = self._run(resolve_solver(solver), bool(verbose), solver_options)
+        if run.x is None:
+            return self._failed(run, acc, raise_on_failure)
+        result = self._judge(run, acc)
+        if raise_on_failure and result.status is not Status.OPTIMAL:
+            raise SolverError(
+                f"{self.name} with {run.solver}: status {result.status.value}; certified error "
+                f"{result.error_bound:.3e} (relative {result.relative_error:.3e}, requested "
+                f"{acc:.1e}); primal residual {result.primal_residual:.3e}, dual residual "
+                f"{result.dual_residual:.3e}, gap {result.gap:.3e}"
+            )
+        return result
+
+    def _run(self, name: str, verbose: bool, options: dict[str, Any]) -> _Run:
+        """Call the solver through cvxpy; map its status; keep any point it returned."""
         t0 = time.perf_counter()
         try:
-            self.problem.solve(solver=name, verbose=verbose, **solver_options)
+            self.problem.solve(solver=name, verbose=verbose, **options)
         except cp.SolverError as exc:
-            return self._failed(
-                name, solver_options, Status.SOLVER_ERROR, str(exc), t0, raise_on_failure
-            )
-        except (ValueError, TypeError) as exc:
-            raise SolverError(f"{self.name} with {name}: bad solver option: {exc}") from exc
+            return _Run(name, options, Status.SOLVER_ERROR, str(exc), None, None, 0.0,
+                        time.perf_counter() - t0, None)  # fmt: skip
+        except (ValueError, TypeError, ArithmeticError) as exc:
+            msg = f"cvxpy or {name} rejected the problem or an option: {exc}"
+            return _Run(name, options, Status.SOLVER_ERROR, msg, None, None, 0.0,
+                        time.perf_counter() - t0, None)  # fmt: skip
         status = _STATUS.get(self.problem.status, Status.SOLVER_ERROR)
         x = self.variable.value
         y = self.constraint.dual_value
-        if x is None or status in (Status.INFEASIBLE, Status.UNBOUNDED, Status.SOLVER_ERROR):
-            return self._failed(
-                name, solver_options, status, str(self.problem.status), t0, raise_on_failure
-            )
-        x = np.asarray(x, dtype=np.float64).ravel()
-        y = (
-            np.zeros(self.A.shape[0])
-            if y is None
-            else np.maximum(np.asarray(y, dtype=np.float64).ravel(), 0.0)
-        )
-        ax = self.A @ x
-        primal = float(max(0.0, (self.b - ax).max(initial=0.0)))
-        tol = residual_rtol * max(1.0, float(np.abs(self.b).max(initial=0.0)))
-        dual_res = float(np.abs(self.A.T @ y - self.c).max(initial=0.0))
-        obj = float(self.c @ x)
-        gap = abs(obj - float(self.b @ y))
-        if status is Status.OPTIMAL and primal > tol:
-            status = Status.RESIDUAL_TOO_LARGE
+        if x is None or not status.has_point:
+            x = None
         stats = self.problem.solver_stats
         compile_s = float(getattr(self.problem, "compilation_time", None) or 0.0)
         solve_s = float(stats.solve_time) if stats and stats.solve_time else 0.0
+        return _Run(
+            solver=name,
+            options=options,
+            status=status,
+            message=str(self.problem.status),
+            x=None if x is None else np.asarray(x, dtype=np.float64).ravel(),
+            y=None if y is None else np.maximum(np.asarray(y, dtype=np.float64).ravel(), 0.0),
+            compile_seconds=compile_s,
+            solve_seconds=solve_s if solve_s else time.perf_counter() - t0 - compile_s,
+            iterations=(int(stats.num_iters) if stats and stats.num_iters is not None else None),
+        )
+
+    def _judge(self, run: _Run, accuracy: float) -> LPResult:
+        """The certified result of a run that returned a point."""
+        assert run.x is not None
+        x = run.x
+        y = np.zeros(self.A.shape[0]) if run.y is None else run.y
+        primal = float(max(0.0, (self.b - self.A @ x).max(initial=0.0)))
+        dual_res = float(np.abs(self.A.T @ y - self.c).max(initial=0.0))
+        obj = float(self.c @ x)
+        gap = abs(obj - float(self.b @ y))
+        cert = self._certify(x)
+        if cert is not None:
+            lower, upper, bracket = self._bracket(cert)
+            tol = accuracy * cert.reward_absmax
+            accurate = self._accurate(cert, accuracy)
+            err = cert.error_bound
+        else:
+            lower = upper = bracket = None
+            tol = accuracy * float(np.abs(self.b).max(initial=0.0))
+            accurate = primal <= tol
+            err = float("inf")
+        status = run.status
+        if status in (Status.OPTIMAL, Status.INACCURATE):
+            status = Status.OPTIMAL if accurate else Status.INACCURATE
         values, state_values, mu, extra = self._interpret(x, y)
-        result = LPResult(
+        return LPResult(
             formulation=self.name,
             status=status,
             objective=obj,
@@ -353,56 +462,49 @@ class Formulation:
             state_values=state_values,
             duals=y,
             mu=mu,
-            solver=name,
-            solver_options=dict(solver_options),
-            compile_seconds=compile_s,
-            solve_seconds=solve_s if solve_s else time.perf_counter() - t0 - compile_s,
-            iterations=(int(stats.num_iters) if stats and stats.num_iters is not None else None),
+            solver=run.solver,
+            solver_options=dict(run.options),
+            compile_seconds=run.compile_seconds,
+            solve_seconds=run.solve_seconds,
+            iterations=run.iterations,
             primal_residual=primal,
             residual_tol=tol,
             dual_residual=dual_res,
             gap=gap,
+            lower_values=lower,
+            upper_values=upper,
+            error_bound=err,
+            objective_bracket=bracket,
+            certificate=cert,
+            accuracy=accuracy,
             extra=extra,
         )
-        if raise_on_failure and status is not Status.OPTIMAL:
-            raise SolverError(
-                f"{self.name} with {name}: status {status.value}; primal residual "
-                f"{primal:.3e} (tolerance {tol:.3e}), dual residual {dual_res:.3e}, gap {gap:.3e}"
-            )
-        return result
 
-    def _failed(
-        self,
-        solver: str,
-        options: dict[str, Any],
-        status: Status,
-        message: str,
-        t0: float,
-        raise_on_failure: bool,
-    ) -> LPResult:
+    def _failed(self, run: _Run, accuracy: float, raise_on_failure: bool) -> LPResult:
         if raise_on_failure:
-            raise SolverError(f"{self.name} with {solver}: {status.value} ({message})")
+            raise SolverError(f"{self.name} with {run.solver}: {run.status.value} ({run.message})")
         n_rows, n_cols = self.A.shape
         nan = np.full(n_cols, np.nan)
         return LPResult(
             formulation=self.name,
-            status=status,
+            status=run.status,
             objective=float("nan"),
             x=nan,
             values=nan,
             state_values=None,
             duals=np.full(n_rows, np.nan),
             mu=None,
-            solver=solver,
-            solver_options=dict(options),
-            compile_seconds=0.0,
-            solve_seconds=time.perf_counter() - t0,
-            iterations=None,
+            solver=run.solver,
+            solver_options=dict(run.options),
+            compile_seconds=run.compile_seconds,
+            solve_seconds=run.solve_seconds,
+            iterations=run.iterations,
             primal_residual=float("nan"),
             residual_tol=float("nan"),
             dual_residual=float("nan"),
             gap=float("nan"),
-            extra={"message": message},
+            accuracy=accuracy,
+            extra={"message": run.message},
         )
 
     def __repr__(self) -> str:

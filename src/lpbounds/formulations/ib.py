@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from ..certificate import Certificate, certify
 from ..errors import ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
@@ -83,6 +84,14 @@ class IB(RowsLP):
         block_mu = np.stack([self.base_rows.pair_values(yj) for yj in yb])
         extra = {"blocks": blocks, "block_mu": block_mu}
         return blocks[0], self.partition.lift(blocks[0]), block_mu.sum(axis=0), extra
+
+    def _bracket(
+        self, cert: Certificate
+    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
+        """Block ``v_1``'s bracket as ``lower_values``/``upper_values``; every block's is in
+        ``result.certificate`` (shape (L * M,)); the objective bracket covers all blocks."""
+        m = self.partition.n_partitions
+        return cert.lower[:m], cert.upper[:m], cert.objective_bracket(self.c)
 
     def fixed_point(self, tol: float | None = None) -> np.ndarray:
         """``(v*, ..., v*)`` stacked as an (L, M) array, ``v*`` = RLP's fixed point (Lemma 1)."""
@@ -205,6 +214,20 @@ class LLP(Formulation):
         mu = np.zeros(self.d.shape)
         mu[self.pairs[:, 0], self.pairs[:, 1]] = y[:k] - y[k : 2 * k]
         return v, self.partition.lift(v), mu, {"z": z}
+
+    def _certify(self, x: np.ndarray) -> Certificate:
+        """The bracket on RLP's ``v*`` from LLP's ``v`` (LLP's optimal ``v`` dominates ``v*``)."""
+        return certify(self.rows, x[: self._m])
+
+    def _bracket(
+        self, cert: Certificate
+    ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
+        return cert.lower, cert.upper, None
+
+    def _accurate(self, cert: Certificate, accuracy: float) -> bool:
+        """LLP's ``v`` need not be ``v*`` (it dominates it): only its feasibility, i.e. the
+        certified upper bound's distance from ``v``, is judged."""
+        return cert.residual_up <= accuracy * cert.reward_absmax
 
     def fixed_point(self, tol: float | None = None) -> np.ndarray:
         """``v*``: the least element of the projection of LLP's feasible set onto ``v``.

@@ -3,7 +3,8 @@ r"""The LP of a Bellman row system: ``min c'v  s.t.  v(owner_r) >= q_r(v)`` for 
 ELP, RLP, UBLP and LBLP are all of this form; they differ only in their rows. By
 Fact 1 of :mod:`lpbounds.rows` the optimum for any cost ``c >= 0`` is the least
 feasible point, the fixed point of the max over the rows, which :meth:`RowsLP.fixed_point`
-computes without a solver.
+computes without a solver, and :func:`lpbounds.certificate.certify` turns any returned point
+into a certified bracket on that optimum (the result's ``lower_values``/``upper_values``).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from ..certificate import Certificate, certify
 from ..dp import solve_exact
 from ..rows import BellmanRows
 from .base import Formulation, check_cost
@@ -43,6 +45,10 @@ class RowsLP(Formulation):
     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         mu = self.rows.pair_values(y) if self.rows.pair_row is not None else None
         return x, None, mu, {}
+
+    def _certify(self, x: np.ndarray) -> Certificate:
+        """The bracket on the exact optimum (the least feasible point) from ``x`` alone."""
+        return certify(self.rows, x)
 
     def fixed_point(self, tol: float | None = None) -> np.ndarray:
         """The exact optimum, solver-free: the fixed point of ``max`` over the rows (Fact 1)."""
