@@ -35,10 +35,33 @@ zero-sum stochastic game (the controller picks ``u``, an adversary the row).
 
 *Proof.* ``G`` is monotone (max and min of monotone maps) and a ``lambda``-contraction
 (max and min are 1-Lipschitz in the max norm), so it has one fixed point ``w*``, in
-``G``. If ``w`` is in ``G`` then ``w >= Gw >= ... -> w*``. []
+``G``. If ``w`` is in ``G`` then ``w >= Gw >= ... -> w*``. (Every owner needs at least
+one group ``(i, u)``: an owner with none is unconstrained and ``w*(i) = -inf``.) []
 
 So the NLP (eq. 24-25) has the same optimum for every cost ``c >= 0`` and one solve
 gives the bound for every partition; the paper's one-LP-per-partition is not needed.
+
+**Action sets (why** ``aggregate(reduce="min")`` **drops some (i, u)).** The NLP's bound
+``w*(i) <= min_{x in S_i} V*(x)`` holds because ``wbar(i) = min_{S_i} V*`` lies in
+``G``: for a group ``(i, u)`` take ``x0 = argmin_{S_i} V*``; *if u is allowed at x0*,
+``wbar(i) = V*(x0) >= R_u(x0) + lambda sum_l p_l V*(f(x0, u, Y_l)) >= q_{(x0,u)}(wbar)
+>= min_{x in S_i} q_{(x,u)}(wbar)`` (``V* >= Phi wbar`` and monotonicity), so the
+disjunction holds at ``wbar``; then ``w* <= wbar`` by Fact 2. If ``u`` is *not*
+allowed at ``x0`` nothing bounds ``V*(x0)`` through ``u``: the state's term is
+``R_u(x0) = -inf`` (a forbidden action is infinitely bad), so the min over ``S_i`` is
+``-inf`` and the disjunction ``w(i) >= -inf`` says nothing. Keeping the terms of the
+states that do allow ``u`` instead can put ``wbar`` outside ``G`` and ``w*`` *above*
+``min_{S_i} V*`` (two states, state 0 allowing action 0 only: ``V* = [0, 10]``, the
+kept term of state 1 under action 1 gave ``w* = 10``). Since ``x0`` is not known in
+advance, a group ``(i, u)`` is kept only when ``u`` is allowed at *every* state of
+``S_i``; with that rule ``wbar`` is in ``G`` and the bound holds. A partition whose
+states share no allowed action keeps no group and its bound is ``-inf``;
+:meth:`BellmanRows.aggregate` refuses it with a :class:`~lpbounds.errors.ValidationError`
+naming the partition (refine the partition so that its states share an action). The
+patrol partitions satisfy the rule by construction (the allowed actions are a function
+of the partition key, :mod:`lpbounds.patrol.bounds`). The max-rows of RLP (eq. 9) need
+no such rule: a disallowed pair simply has no row, and every row that exists is implied
+at ``Phi v`` by a Bellman inequality of an allowed pair (Theorem 1).
 The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels`.
 """
 
@@ -232,6 +255,11 @@ class BellmanRows:
         (``reduce="max"``: the other rows are implied, as in RLP) or the smallest
         (``reduce="min"``: the disjunctive NLP's terms, eq. 25).
 
+        With ``reduce="min"`` the rows of ``(i, u)`` are dropped altogether when ``u``
+        is not allowed at every state of ``S_i`` (such a state contributes a term
+        ``-inf`` to the disjunction's min: see "Action sets" in the module docstring);
+        their pairs get ``pair_row = -1``.
+
         Parameters
         ----------
         mdp : FiniteMDP
@@ -243,6 +271,13 @@ class BellmanRows:
         -------
         BellmanRows
             With ``pair_row``/``pair_tight`` mapping every pair to its merged row.
+
+        Raises
+        ------
+        ValidationError
+            With ``reduce="min"``, if the states of some partition share no allowed
+            action (the NLP's bound on it would be ``-inf``); the message names the
+            partition and its states' action sets.
         """
         if partition.n_states != mdp.n_states:
             raise ValidationError(
@@ -287,11 +322,25 @@ class BellmanRows:
             group, reward_merged, g_owner, g_action, g_t, g_p,
         )  # fmt: skip
         del targets, probs, owner, key, oa, order
+        if reduce == "min" and not mdp.allowed.all():
+            keep = _common_actions(mdp, partition)[g_owner, g_action]
+            if not keep.all():
+                renumber = np.cumsum(keep) - 1
+                renumber[~keep] = -1
+                group = renumber[group]
+                g_owner, g_action, reward_merged = (
+                    g_owner[keep],
+                    g_action[keep],
+                    reward_merged[keep],
+                )
+                g_t, g_p = g_t[keep], g_p[keep]
+            _check_every_partition_kept(mdp, partition, g_owner)
         pair_row = np.full(exact.pair_row.shape, -1, dtype=np.int64)
         allowed = exact.pair_row >= 0
         pair_row[allowed] = group[exact.pair_row[allowed]]
         tight = np.zeros(pair_row.shape, dtype=bool)
-        tight[allowed] = exact.reward[exact.pair_row[allowed]] == reward_merged[pair_row[allowed]]
+        kept = pair_row >= 0
+        tight[kept] = exact.reward[exact.pair_row[kept]] == reward_merged[pair_row[kept]]
         return cls._finish(
             m, g_owner, g_action, reward_merged, g_t, g_p, mdp.discount, pair_row, tight
         )
@@ -659,6 +708,37 @@ def _reward_codes(
     if count <= 256:
         codes = codes.astype(np.uint8)
     return codes, table[:count].copy()
+
+
+def _common_actions(mdp: FiniteMDP, partition: Partition) -> np.ndarray:
+    """``(M, A)`` bool: action ``u`` is allowed at every state of ``S_i``."""
+    labels = partition.labels
+    m = partition.n_partitions
+    sizes = np.bincount(labels, minlength=m)
+    count = np.empty((m, mdp.n_actions), dtype=np.int64)
+    for u in range(mdp.n_actions):
+        count[:, u] = np.bincount(labels[mdp.allowed[:, u]], minlength=m)
+    return count == sizes[:, None]
+
+
+def _check_every_partition_kept(mdp: FiniteMDP, partition: Partition, owner: np.ndarray) -> None:
+    """A ValidationError naming the first partition left without a row by the action-set rule."""
+    counts = np.bincount(owner, minlength=partition.n_partitions)
+    empty = np.flatnonzero(counts == 0)
+    if empty.size == 0:
+        return
+    i = int(empty[0])
+    states = np.flatnonzero(partition.labels == i)
+    shown = ", ".join(
+        f"{int(x)}: {np.flatnonzero(mdp.allowed[x]).tolist()}" for x in states[:6]
+    ) + (", ..." if states.size > 6 else "")
+    raise ValidationError(
+        f"partition {i} has no action allowed at all of its {states.size} states (allowed "
+        f"actions by state: {shown}); {empty.size} partition(s) like this. The disjunctive "
+        f"NLP (eq. 25) keeps (i, u) only when u is allowed at every state of S_i, so it puts "
+        f"no constraint on w({i}) and its lower bound on min over S_{i} of V* is -inf. "
+        "Refine the partition so that the states of each part share an allowed action."
+    )
 
 
 def _nchunks() -> int:
