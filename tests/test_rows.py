@@ -22,6 +22,8 @@ def reference_aggregate(mdp, part, reduce="max"):
         for u in range(mdp.n_actions):
             if not mdp.allowed[x, u]:
                 continue
+            if reduce == "min" and not mdp.allowed[part.labels == part.labels[x], u].all():
+                continue  # the NLP keeps (i, u) only if u is allowed on all of S_i
             dist: dict = {}
             for ll in range(mdp.n_outcomes):
                 if p[x, u, ll] > 0:
