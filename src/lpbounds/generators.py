@@ -7,6 +7,7 @@ import numpy as np
 from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
+from .validation import check_bool, check_int, check_real, check_seed
 
 __all__ = ["garnet", "random_partition"]
 
@@ -45,10 +46,16 @@ def garnet(
     -------
     FiniteMDP
     """
-    if n_states < 1 or n_actions < 1 or branching < 1:
-        raise ValidationError("n_states, n_actions and branching must be >= 1")
-    if not 0 < allowed_fraction <= 1:
-        raise ValidationError(f"allowed_fraction must lie in (0, 1]; got {allowed_fraction}")
+    n_states = check_int("n_states", n_states, lo=1)
+    n_actions = check_int("n_actions", n_actions, lo=1)
+    branching = check_int("branching", branching, lo=1)
+    check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
+    seed = check_seed("seed", seed)
+    shared_probabilities = check_bool("shared_probabilities", shared_probabilities)
+    lo, hi = _check_range("reward_range", reward_range)
+    allowed_fraction = check_real(
+        "allowed_fraction", allowed_fraction, lo=0.0, hi=1.0, lo_open=True
+    )
     rng = np.random.default_rng(seed)
     succ = rng.integers(0, n_states, size=(n_states, n_actions, branching)).astype(
         index_dtype(n_states)
@@ -58,7 +65,6 @@ def garnet(
     zeros = np.zeros((*shape[:-1], 1))
     ones = np.ones((*shape[:-1], 1))
     probs = np.diff(np.concatenate([zeros, cuts, ones], axis=-1), axis=-1)
-    lo, hi = reward_range
     rewards = rng.uniform(lo, hi, size=(n_states, n_actions))
     allowed = None
     if allowed_fraction < 1:
@@ -69,11 +75,25 @@ def garnet(
 
 def random_partition(n_states: int, n_partitions: int, seed: int | None = 0) -> Partition:
     """A uniformly random partition of ``n_states`` states into exactly ``n_partitions`` sets."""
-    if not 1 <= n_partitions <= n_states:
+    n_states = check_int("n_states", n_states, lo=1)
+    n_partitions = check_int("n_partitions", n_partitions, lo=1)
+    if n_partitions > n_states:
         raise ValidationError(
             f"n_partitions must lie in [1, n_states={n_states}]; got {n_partitions}"
         )
+    seed = check_seed("seed", seed)
     rng = np.random.default_rng(seed)
     labels = rng.integers(0, n_partitions, size=n_states)
     labels[rng.permutation(n_states)[:n_partitions]] = np.arange(n_partitions)
     return Partition(labels)
+
+
+def _check_range(name: str, value: object) -> tuple[float, float]:
+    """A pair ``(low, high)`` of finite reals with ``low <= high``."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list)) or len(value) != 2:
+        raise ValidationError(f"{name} must be a pair (low, high); got {value!r}")
+    lo = check_real(f"{name}[0]", value[0])
+    hi = check_real(f"{name}[1]", value[1])
+    if lo > hi:
+        raise ValidationError(f"{name} = ({lo}, {hi}) has low > high")
+    return lo, hi

@@ -8,7 +8,8 @@ allowed actions ``U_x`` (``allowed[x, u]``). Several outcomes may lead to the sa
 the transition probability ``P_u(x, y)`` is the sum of the ``p_l`` with
 ``f(x, u, Y_l) = y`` (eq. 2).
 
-All input is validated here, at the boundary, and a bad entry raises
+All input is validated here, at the boundary (with the shared checks of
+:mod:`lpbounds.validation`), and a bad entry raises
 :class:`~lpbounds.errors.ValidationError` naming it. Arrays are stored read-only.
 """
 
@@ -23,6 +24,16 @@ import scipy.sparse as sp
 
 from .errors import ValidationError
 from .tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
+from .validation import (
+    as_array,
+    as_float_array,
+    check_array,
+    check_bool,
+    check_indices,
+    check_real,
+    check_value_scale,
+    first_index,
+)
 
 __all__ = ["FiniteMDP", "index_dtype"]
 
@@ -30,11 +41,6 @@ __all__ = ["FiniteMDP", "index_dtype"]
 def index_dtype(n: int) -> type[np.signedinteger[Any]]:
     """Smallest signed integer type that indexes ``n`` items (int32 or int64)."""
     return np.int32 if n < 2**31 - 1 else np.int64
-
-
-def _first(mask: np.ndarray) -> tuple[int, ...]:
-    """Index of the first True entry of ``mask`` as a tuple of ints."""
-    return tuple(int(i) for i in np.argwhere(mask)[0])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -99,7 +105,12 @@ class FiniteMDP:
     Raises
     ------
     ValidationError
-        Naming the first offending entry (shape, index, probability, reward, discount).
+        Naming the first offending entry (shape, dtype, index, probability, reward,
+        discount). Booleans, strings and complex numbers are refused before any cast;
+        successor indices are range-checked in the dtype given, before the cast to the
+        index dtype. A model whose value scale ``max|R| / (1 - discount)`` exceeds
+        :data:`~lpbounds.validation.MAX_VALUE_SCALE` (1e300) is refused: its values
+        would overflow float64 in DP and in the LPs' certificates.
 
     Notes
     -----
@@ -118,7 +129,8 @@ class FiniteMDP:
         *,
         copy: bool = True,
     ) -> None:
-        succ = np.asarray(successors)
+        copy = check_bool("copy", copy)
+        succ = check_array("successors", successors, integer=True)
         if succ.ndim != 3:
             raise ValidationError(
                 f"successors must have shape (n_states, n_actions, n_outcomes); got {succ.shape}"
@@ -126,19 +138,44 @@ class FiniteMDP:
         n, n_actions, n_out = succ.shape
         if n == 0 or n_actions == 0 or n_out == 0:
             raise ValidationError(f"successors has an empty dimension: shape {succ.shape}")
-        if not np.issubdtype(succ.dtype, np.integer):
-            if not np.issubdtype(succ.dtype, np.floating) or not np.all(succ == np.round(succ)):
-                raise ValidationError(f"successors must be integers; got dtype {succ.dtype}")
         self.discount = self._check_discount(discount)
+        allow = self._check_allowed(allowed, n, n_actions)
+        succ = self._store_successors(succ, successors, allow, copy)
+        rew = self._check_rewards(rewards, allow, copy)
+        check_value_scale(max(float(rew.max()), -float(rew.min())), self.discount)
 
-        allow = np.ones((n, n_actions), dtype=bool) if allowed is None else np.asarray(allowed)
+        self.probabilities = _readonly(self._check_probabilities(probabilities, allow, succ.shape))
+        self.successors = _readonly(succ)
+        self.rewards = _readonly(rew)
+        self.allowed = _readonly(allow.copy())
+        self.action_names = self._check_action_names(action_names, n_actions)
+
+    # ------------------------------------------------------------------ validation
+    @staticmethod
+    def _check_discount(discount: float) -> float:
+        return check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
+
+    @staticmethod
+    def _check_allowed(allowed: Any, n: int, n_actions: int) -> np.ndarray:
+        if allowed is None:
+            return np.ones((n, n_actions), dtype=bool)
+        allow = as_array("allowed", allowed)
+        if allow.dtype != bool:
+            try:
+                allow = check_array("allowed", allow, integer=True)
+            except ValidationError as exc:
+                raise ValidationError(f"{exc} (allowed must be boolean, or 0/1)") from None
         if allow.shape != (n, n_actions):
             raise ValidationError(
                 f"allowed must have shape {(n, n_actions)} (n_states, n_actions); got {allow.shape}"
             )
         if allow.dtype != bool:
-            if not np.all((allow == 0) | (allow == 1)):
-                raise ValidationError("allowed must be boolean (or 0/1)")
+            bad = (allow != 0) & (allow != 1)
+            if bad.any():
+                x, u = first_index(bad)
+                raise ValidationError(
+                    f"allowed must be boolean (or 0/1); allowed[{x}, {u}] = {allow[x, u]}"
+                )
             allow = allow.astype(bool)
         no_action = ~allow.any(axis=1)
         if no_action.any():
@@ -146,33 +183,53 @@ class FiniteMDP:
             raise ValidationError(
                 f"state {x} has no allowed action ({int(no_action.sum())} such states)"
             )
+        return allow
 
+    @staticmethod
+    def _store_successors(
+        succ: np.ndarray, given: Any, allow: np.ndarray, copy: bool
+    ) -> np.ndarray:
+        """Range-check ``succ`` in its own dtype, then store it as the index dtype.
+
+        The check runs before the cast: an int64 ``2**32 + 1`` must be refused, not
+        wrapped to a valid int32 index. An array already of the index dtype is checked
+        by one compiled pass without temporaries (and kept, with ``copy=False``).
+        """
+        n = succ.shape[0]
         idt = index_dtype(n)
-        owned = not copy and succ.dtype == idt and succ.flags.c_contiguous
-        succ = succ if owned else np.ascontiguousarray(succ, dtype=idt)
-        if succ is successors and copy:
-            succ = succ.copy()
-        n_bad, first, n_bad_disallowed = _check_successors(succ, allow, n)
-        if n_bad:
-            x, u, ll = np.unravel_index(first, succ.shape)
-            raise ValidationError(
-                f"successors[{x}, {u}, {ll}] = {int(succ[x, u, ll])} is out of range "
-                f"[0, {n}) ({n_bad} such entries)"
-            )
+        if succ.dtype == idt:
+            n_bad, first, n_bad_disallowed = _check_successors(succ, allow, n)
+            if n_bad:
+                x, u, ll = np.unravel_index(first, succ.shape)
+                raise ValidationError(
+                    f"successors[{x}, {u}, {ll}] = {int(succ[x, u, ll])} is out of range "
+                    f"[0, {n}) ({n_bad} such entries)"
+                )
+            owned = not copy and succ.flags.c_contiguous
+            out = succ if owned else np.ascontiguousarray(succ)
+            if out is given and copy:
+                out = out.copy()
+        else:  # a cast is needed anyway: check in the given dtype, then cast
+            _, n_bad_disallowed = check_indices("successors", succ, n, where=allow[:, :, None])
+            with np.errstate(invalid="ignore"):  # disallowed entries may not fit: replaced
+                out = np.ascontiguousarray(succ, dtype=idt)
         if n_bad_disallowed:  # never read, but keep every stored index in range
-            if not succ.flags.writeable:
-                succ = succ.copy()
+            if not out.flags.writeable or out is given:
+                out = out.copy()
             rows, cols = np.nonzero(~allow)
-            succ[rows, cols, :] = rows[:, None].astype(idt)
+            out[rows, cols, :] = rows[:, None].astype(idt)
+        return out
 
-        rew = np.asarray(rewards, dtype=np.float64)
-        if rew.shape != (n, n_actions):
+    @staticmethod
+    def _check_rewards(rewards: Any, allow: np.ndarray, copy: bool) -> np.ndarray:
+        rew = as_float_array("rewards", rewards, finite=False)
+        if rew.shape != allow.shape:
             raise ValidationError(
-                f"rewards must have shape {(n, n_actions)} (n_states, n_actions); got {rew.shape}"
+                f"rewards must have shape {allow.shape} (n_states, n_actions); got {rew.shape}"
             )
         nonfinite = ~np.isfinite(rew) & allow
         if nonfinite.any():
-            x, u = _first(nonfinite)
+            x, u = first_index(nonfinite)
             raise ValidationError(
                 f"rewards[{x}, {u}] = {rew[x, u]} is not finite on an allowed pair "
                 f"({int(nonfinite.sum())} such entries)"
@@ -181,35 +238,30 @@ class FiniteMDP:
             rew = np.where(allow, rew, 0.0)  # disallowed rewards are stored as 0
         elif copy and rew is rewards:
             rew = rew.copy()
+        return rew
 
-        self.probabilities = _readonly(self._check_probabilities(probabilities, allow, succ.shape))
-        self.successors = _readonly(succ)
-        self.rewards = _readonly(rew)
-        self.allowed = _readonly(allow.copy())
+    @staticmethod
+    def _check_action_names(action_names: Any, n_actions: int) -> tuple[str, ...]:
         if action_names is None:
-            action_names = [str(u) for u in range(n_actions)]
+            return tuple(str(u) for u in range(n_actions))
+        if isinstance(action_names, (str, bytes)) or not isinstance(action_names, Sequence):
+            raise ValidationError(
+                f"action_names must be a sequence of {n_actions} strings; got {action_names!r}"
+            )
         if len(action_names) != n_actions:
             raise ValidationError(
                 f"action_names has {len(action_names)} names for {n_actions} actions"
             )
-        self.action_names = tuple(str(a) for a in action_names)
-
-    # ------------------------------------------------------------------ validation
-    @staticmethod
-    def _check_discount(discount: float) -> float:
-        try:
-            lam = float(discount)
-        except (TypeError, ValueError) as exc:
-            raise ValidationError(f"discount must be a number in [0, 1); got {discount!r}") from exc
-        if not (0.0 <= lam < 1.0):
-            raise ValidationError(f"discount must lie in [0, 1); got {lam}")
-        return lam
+        for u, name in enumerate(action_names):
+            if not isinstance(name, str):
+                raise ValidationError(f"action_names[{u}] = {name!r} is not a string")
+        return tuple(action_names)
 
     @staticmethod
     def _check_probabilities(
         probabilities: Any, allow: np.ndarray, shape: tuple[int, int, int]
     ) -> np.ndarray:
-        p = np.asarray(probabilities, dtype=np.float64)
+        p = as_float_array("probabilities", probabilities, finite=False)
         _n, _n_actions, n_out = shape
         if p.shape == (n_out,):
             where = "probabilities"
@@ -231,11 +283,11 @@ class FiniteMDP:
             )
         nonfinite = ~np.isfinite(p) & allow[:, :, None]
         if nonfinite.any():
-            x, u, ll = _first(nonfinite)
+            x, u, ll = first_index(nonfinite)
             raise ValidationError(f"probabilities[{x}, {u}, {ll}] = {p[x, u, ll]} is not finite")
         neg = (p < -PROBABILITY_NEGATIVE_ATOL) & allow[:, :, None]
         if neg.any():
-            x, u, ll = _first(neg)
+            x, u, ll = first_index(neg)
             raise ValidationError(
                 f"probabilities[{x}, {u}, {ll}] = {p[x, u, ll]} is negative "
                 f"({int(neg.sum())} such entries)"
@@ -243,7 +295,7 @@ class FiniteMDP:
         sums = p.sum(axis=2)
         off = (np.abs(sums - 1.0) > PROBABILITY_SUM_ATOL) & allow
         if off.any():
-            x, u = _first(off)
+            x, u = first_index(off)
             raise ValidationError(
                 f"probabilities[{x}, {u}, :] sum to {float(sums[x, u]):.12g}, not 1 "
                 f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(off.sum())} such pairs)"
@@ -319,16 +371,19 @@ class FiniteMDP:
             With ``L`` = the largest number of non-zeros in a row of ``P`` and the
             outcomes of each pair listed in column order (padded with probability 0).
         """
+        cls._check_discount(discount)
         mats = cls._matrix_list(P, "P")
         n_actions = len(mats)
         n = mats[0].shape[0]
+        if n == 0:
+            raise ValidationError("P[0] has no state (shape (0, 0))")
         for a, m in enumerate(mats):
             if m.shape != (n, n):
                 raise ValidationError(f"P[{a}] has shape {m.shape}; expected {(n, n)}")
         nnz = np.stack([np.diff(m.indptr) for m in mats], axis=1)  # (n, A)
         empty = nnz == 0
         if empty.any():
-            x, a = _first(empty)
+            x, a = first_index(empty)
             raise ValidationError(f"row {x} of P[{a}] is empty (sums to 0, not 1)")
         n_out = int(nnz.max())
         idt = index_dtype(n)
@@ -360,6 +415,11 @@ class FiniteMDP:
             raise ValidationError(f"{name} has no actions")
         out = []
         for a, m in enumerate(items):
+            if sp.issparse(m):
+                if m.dtype.kind not in "iuf":
+                    raise ValidationError(f"{name}[{a}] must hold real numbers; got {m.dtype}")
+            else:
+                m = check_array(f"{name}[{a}]", m, finite=False)
             mat = sp.csr_matrix(m, dtype=np.float64)
             if mat.ndim != 2:
                 raise ValidationError(f"{name}[{a}] is not a matrix")
@@ -374,7 +434,7 @@ class FiniteMDP:
         cls, R: Any, mats: list[sp.csr_matrix], n: int, n_actions: int
     ) -> np.ndarray:
         if not sp.issparse(R) and not isinstance(R, (list, tuple)):
-            arr = np.asarray(R, dtype=np.float64)
+            arr = as_float_array("R", R, finite=False)
             if arr.shape == (n,):
                 return np.repeat(arr[:, None], n_actions, axis=1)
             if arr.shape == (n, n_actions):
@@ -412,7 +472,7 @@ class FiniteMDP:
         """
         n = self.n_states
         if not self.allowed.all() and disallowed_reward is None:
-            x, u = _first(~self.allowed)
+            x, u = first_index(~self.allowed)
             raise ValidationError(
                 f"action {u} is not allowed in state {x}; pymdptoolbox matrices cannot "
                 "express that: pass disallowed_reward= (a very negative number)"
@@ -434,5 +494,5 @@ class FiniteMDP:
             mats.append(m)
         rew = np.array(self.rewards, dtype=np.float64)
         if disallowed_reward is not None:
-            rew[~self.allowed] = float(disallowed_reward)
+            rew[~self.allowed] = check_real("disallowed_reward", disallowed_reward)
         return mats, rew

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 
 from .errors import ValidationError
 from .mdp import index_dtype
+from .validation import as_array, as_float_array, check_array, check_int
 
 __all__ = ["Partition"]
 
@@ -33,24 +34,36 @@ class Partition:
     Raises
     ------
     ValidationError
-        If a label is negative or not an integer, or an index in ``0..M-1`` is unused.
+        If a label is negative or not an integer (booleans, strings and fractional
+        floats are refused), or an index in ``0..M-1`` is unused. Since every index is
+        used, ``M <= n``: a larger label is refused before anything of size ``M`` is
+        allocated.
     """
 
     def __init__(self, labels: Any, n_partitions: int | None = None) -> None:
-        lab = np.asarray(labels)
+        lab = check_array("labels", labels, integer=True)
         if lab.ndim != 1 or lab.size == 0:
             raise ValidationError(f"labels must be a non-empty 1-d array; got shape {lab.shape}")
-        if not np.issubdtype(lab.dtype, np.integer):
-            if not np.issubdtype(lab.dtype, np.floating) or not np.all(lab == np.round(lab)):
-                raise ValidationError(f"labels must be integers; got dtype {lab.dtype}")
+        n = lab.size
         if (lab < 0).any():
             x = int(np.flatnonzero(lab < 0)[0])
             raise ValidationError(f"labels[{x}] = {int(lab[x])} is negative")
-        m = int(lab.max()) + 1 if n_partitions is None else int(n_partitions)
+        if n_partitions is None:
+            # every index 0..M-1 must be used, so M <= n: checked before bincount allocates M
+            over = lab >= n
+            if over.any():
+                x = int(np.flatnonzero(over)[0])
+                raise ValidationError(
+                    f"labels[{x}] = {int(lab[x])} is out of range [0, {n}): labels must use "
+                    f"every index 0..M-1, so M <= n_states = {n}"
+                )
+            m = int(lab.max()) + 1
+        else:
+            m = check_int("n_partitions", n_partitions, lo=1, hi=n)
         if (lab >= m).any():
             x = int(np.flatnonzero(lab >= m)[0])
             raise ValidationError(f"labels[{x}] = {int(lab[x])} is not below n_partitions = {m}")
-        lab = lab.astype(index_dtype(max(m, lab.size)))
+        lab = lab.astype(index_dtype(max(m, n)))
         sizes = np.bincount(lab, minlength=m)
         if (sizes == 0).any():
             missing = np.flatnonzero(sizes == 0)
@@ -69,7 +82,9 @@ class Partition:
 
         Partition indices follow the lexicographic order of the distinct keys.
         """
-        k = np.asarray(keys)
+        k = as_array("keys", keys)
+        if k.ndim not in (1, 2) or k.size == 0:
+            raise ValidationError(f"keys must be a non-empty (n,) or (n, k) array; got {k.shape}")
         if k.ndim == 1:
             k = k[:, None]
         _, inverse = np.unique(k, axis=0, return_inverse=True)
@@ -78,7 +93,7 @@ class Partition:
     @classmethod
     def singletons(cls, n_states: int) -> Partition:
         """The finest partition: every state alone (RLP becomes the exact LP)."""
-        return cls(np.arange(n_states))
+        return cls(np.arange(check_int("n_states", n_states, lo=1)))
 
     @property
     def n_states(self) -> int:
@@ -99,6 +114,7 @@ class Partition:
 
     def members(self, i: int) -> np.ndarray:
         """The states of ``S_i``, in increasing order."""
+        i = check_int("i", i)
         if not 0 <= i < self.n_partitions:
             raise ValidationError(f"partition index {i} is out of range [0, {self.n_partitions})")
         order, indptr = self._order
@@ -114,8 +130,8 @@ class Partition:
 
     def lift(self, v: Any) -> np.ndarray:
         """``Phi v``: the value of each state's partition, shape (n,) (or (n, k))."""
-        arr = np.asarray(v)
-        if arr.shape[0] != self.n_partitions:
+        arr = as_array("v", v)
+        if arr.ndim == 0 or arr.shape[0] != self.n_partitions:
             raise ValidationError(
                 f"a vector over partitions must have length {self.n_partitions}; got {arr.shape}"
             )
@@ -123,7 +139,9 @@ class Partition:
 
     def aggregate(self, x: Any, how: str = "sum") -> np.ndarray:
         """Per-partition ``sum``, ``min``, ``max`` or ``mean`` of a per-state vector."""
-        arr = np.asarray(x, dtype=np.float64)
+        if how not in ("sum", "mean", "min", "max"):
+            raise ValidationError(f"unknown aggregation {how!r}; use sum, mean, min or max")
+        arr = as_float_array("x", x, finite=False)
         if arr.shape != (self.n_states,):
             raise ValidationError(
                 f"a vector over states must have length {self.n_states}; got {arr.shape}"
