@@ -39,7 +39,13 @@ import numpy as np
 from .errors import ValidationError
 from .rows import BellmanRows
 
-__all__ = ["Certificate", "certify", "contraction_modulus", "objective_bracket"]
+__all__ = [
+    "Certificate",
+    "certify",
+    "contraction_modulus",
+    "dual_objective_bound",
+    "objective_bracket",
+]
 
 _EPS = float(np.finfo(np.float64).eps)
 _TINY = float(np.finfo(np.float64).tiny)
@@ -121,6 +127,38 @@ def objective_bracket(cost: Any, lower: np.ndarray, upper: np.ndarray) -> tuple[
     return float(np.nextafter(lo, -np.inf)), float(np.nextafter(hi, np.inf))
 
 
+def dual_objective_bound(
+    A: Any, b: np.ndarray, c: np.ndarray, y: Any, lower: np.ndarray, upper: np.ndarray
+) -> float:
+    r"""A rigorous lower bound on ``min {c'v : A v >= b}`` from any multipliers ``y``.
+
+    For ``y >= 0`` and any feasible ``v`` in the box ``[lower, upper]`` (which contains the
+    optimum ``v*`` by the certificate), ``c'v = y'Av + (c - A'y)'v >= y'b + sum_j
+    min(r_j lower_j, r_j upper_j)`` with the reduced costs ``r = c - A'y`` (weak duality on
+    a box). Where a cost is 0 the certificate's box may be wide but ``r`` is then tiny, so
+    this bound certifies optimality of the objective where the point itself is not
+    unique. Rounding: ``y'b`` and each ``r_j`` are sums of at most ``k + 1`` products
+    (``k`` = the most entries of a column or of ``b``), so each is within ``(k + 2) eps``
+    times the sum of its terms' magnitudes; those allowances are subtracted.
+    """
+    yy = np.maximum(np.nan_to_num(np.asarray(y, dtype=np.float64), nan=0.0), 0.0)
+    if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+        return -float("inf")
+    a_abs = abs(A)
+    k = int(np.diff(A.tocsc().indptr).max(initial=0)) + 2
+    red = c - A.T @ yy
+    red_err = (k + 2) * _EPS * (np.abs(c) + a_abs.T @ yy)
+    box = np.minimum(red * lower, red * upper) - red_err * np.maximum(np.abs(lower), np.abs(upper))
+    yb_terms = yy * b
+    total = float(yb_terms.sum()) + float(box.sum())
+    err = (b.size + 2) * _EPS * float(np.abs(yb_terms).sum()) + (box.size + 2) * _EPS * float(
+        np.abs(box).sum()
+    )
+    if not np.isfinite(total):
+        return -float("inf")
+    return float(np.nextafter(total - err - _TINY, -np.inf))
+
+
 def contraction_modulus(rows: BellmanRows) -> float:
     """``lambda * max_r sum_l p_{r,l}``, rounded up; an error if it is not below 1."""
     probs = np.asarray(rows.probs)
@@ -169,11 +207,15 @@ def certify(rows: BellmanRows, v: Any, operator: Operator = "max") -> Certificat
     v_abs = float(np.abs(vv).max(initial=0.0))
     tv_abs = float(np.abs(tv).max(initial=0.0))
     n_out = rows.n_outcomes
-    margin = 2.0 * (
-        (n_out + 3) * _EPS * (r_abs + kappa * v_abs)
-        + _EPS * (tv_abs + v_abs)
-        + n_out * _EPS * kappa * v_abs
-    ) + 4.0 * _TINY
+    margin = (
+        2.0
+        * (
+            (n_out + 3) * _EPS * (r_abs + kappa * v_abs)
+            + _EPS * (tv_abs + v_abs)
+            + n_out * _EPS * kappa * v_abs
+        )
+        + 4.0 * _TINY
+    )
     one_minus = (1.0 - kappa) * (1.0 - 2.0 * _EPS)
     c_up = (d_up + margin) / one_minus * (1.0 + 4.0 * _EPS)
     c_down = (d_down + margin) / one_minus * (1.0 + 4.0 * _EPS)

@@ -77,6 +77,8 @@ class ALP(Formulation):
     """
 
     name = "ALP"
+    #: only the upper side is judged: the point is not a fixed point (see the notes)
+    upper_side_only = True
 
     def __init__(self, mdp: FiniteMDP, basis: Any, cost: Any = None) -> None:
         self.mdp = mdp
@@ -97,9 +99,6 @@ class ALP(Formulation):
         self, cert: Certificate
     ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
         return cert.lower, cert.upper, None
-
-    def _accurate(self, cert: Certificate, accuracy: float) -> bool:
-        return cert.residual_up <= accuracy * cert.reward_absmax
 
 
 def soft_aggregation_basis(n_states: int, n_features: int, seed: int | None = 0) -> np.ndarray:

@@ -32,7 +32,7 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from ..certificate import Certificate
+from ..certificate import Certificate, dual_objective_bound
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
 from ..status import Status
 from ..tolerances import LP_CERT_RTOL
@@ -306,6 +306,9 @@ class Formulation:
     """
 
     name: str = "LP"
+    #: Judge only the upper side of the certificate (formulations whose point dominates,
+    #: rather than equals, the certified fixed point: ALP, LLP).
+    upper_side_only: bool = False
 
     def __init__(self, A: sp.spmatrix, b: np.ndarray, c: np.ndarray, name: str | None = None):
         if name is not None:
@@ -339,9 +342,31 @@ class Formulation:
         """``(lower_values, upper_values, objective_bracket)`` from the certificate."""
         return cert.lower, cert.upper, cert.objective_bracket(self.c)
 
-    def _accurate(self, cert: Certificate, accuracy: float) -> bool:
-        """Whether the certified error is within ``accuracy`` (relative to the problem's scale)."""
-        return cert.is_accurate(accuracy)
+    def _accurate(
+        self,
+        cert: Certificate,
+        accuracy: float,
+        objective: float,
+        bracket: tuple[float, float] | None,
+    ) -> bool:
+        """Whether the point is certified accurate, relative to the problem's scale.
+
+        The point must be feasible to ``accuracy * max|R|`` (its Bellman residual upward,
+        so ``upper_values`` is within ``accuracy * max|R| / (1 - lambda)`` of it), and
+        either within the same of the least feasible point (downward residual) or, where
+        the optimum is not unique (costs with zeros: any feasible value of an unpriced
+        variable is optimal), have an objective certified within ``accuracy * max|R| /
+        (1 - lambda) * sum(c)`` of the optimum by the dual bound of the bracket.
+        """
+        tol = accuracy * cert.reward_absmax
+        if cert.residual_up > tol:
+            return False
+        if self.upper_side_only:
+            return True
+        if cert.residual_down <= tol or bracket is None:
+            return cert.residual_down <= tol
+        excess = (objective - bracket[0]) * (1.0 - cert.modulus)
+        return bool(excess <= tol * float(self.c.sum()))
 
     # ------------------------------------------------------------------ solve
     def solve(
@@ -441,8 +466,11 @@ class Formulation:
         cert = self._certify(x)
         if cert is not None:
             lower, upper, bracket = self._bracket(cert)
+            if bracket is not None and run.y is not None:
+                dual_lo = dual_objective_bound(self.A, self.b, self.c, y, cert.lower, cert.upper)
+                bracket = (max(bracket[0], dual_lo), bracket[1])
             tol = accuracy * cert.reward_absmax
-            accurate = self._accurate(cert, accuracy)
+            accurate = self._accurate(cert, accuracy, obj, bracket)
             err = cert.error_bound
         else:
             lower = upper = bracket = None

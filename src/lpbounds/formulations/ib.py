@@ -167,6 +167,9 @@ class LLP(Formulation):
     """
 
     name = "LLP"
+    #: LLP's ``v`` need not be ``v*`` (it dominates it): only its feasibility, the certified
+    #: upper bound's distance from ``v``, is judged
+    upper_side_only = True
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, d: Any, cost: Any = None) -> None:
         _check_partition(mdp, partition)
@@ -223,11 +226,6 @@ class LLP(Formulation):
         self, cert: Certificate
     ) -> tuple[np.ndarray, np.ndarray, tuple[float, float] | None]:
         return cert.lower, cert.upper, None
-
-    def _accurate(self, cert: Certificate, accuracy: float) -> bool:
-        """LLP's ``v`` need not be ``v*`` (it dominates it): only its feasibility, i.e. the
-        certified upper bound's distance from ``v``, is judged."""
-        return cert.residual_up <= accuracy * cert.reward_absmax
 
     def fixed_point(self, tol: float | None = None) -> np.ndarray:
         """``v*``: the least element of the projection of LLP's feasible set onto ``v``.
