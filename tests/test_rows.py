@@ -174,7 +174,7 @@ def test_mark_groups_detects_equal_keys_of_different_rows():
 def test_from_arrays_validation():
     with pytest.raises(ValidationError, match="variable 1 owns no Bellman row"):
         lb.BellmanRows.from_arrays([0, 0], [0, 1], [1.0, 2.0], [[0], [0]], [1.0], 0.9, 2)
-    with pytest.raises(ValidationError, match="outside"):
+    with pytest.raises(ValidationError, match="out of range"):
         lb.BellmanRows.from_arrays([0], [0], [1.0], [[3]], [1.0], 0.9, 2)
     with pytest.raises(ValidationError, match="sum to 1"):
         lb.BellmanRows.from_arrays([0], [0], [1.0], [[0, 0]], [0.5, 0.2], 0.9, 1)

@@ -50,7 +50,9 @@ import scipy.sparse.linalg as spla
 from .errors import ConvergenceError, ValidationError
 from .mdp import FiniteMDP
 from .rows import BellmanRows, PostDecisionRows, _nchunks
+from .status import Status
 from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
+from .validation import check_array, check_bool, check_choice, check_int, check_real, check_vector
 
 __all__ = [
     "DPResult",
@@ -101,14 +103,29 @@ def post_decision_rows(model: Model) -> PostDecisionRows | None:
 
 def _default_tol(rows: BellmanRows | PostDecisionRows, tol: float | None) -> float:
     if tol is not None:
-        if not (tol > 0 and np.isfinite(tol)):
-            raise ValidationError(f"tol must be a positive number; got {tol}")
-        return float(tol)
+        return check_real("tol", tol, lo=0.0, lo_open=True)
     if isinstance(rows, PostDecisionRows):
         # disallowed rewards are stored as 0, so this is max|R| over the allowed pairs,
         # the same number as on the exact rows
-        return DP_RTOL * dp_scale(rows.reward_absmax, rows.discount)
-    return DP_RTOL * dp_scale(float(np.abs(rows.reward).max(initial=0.0)), rows.discount)
+        scale = dp_scale(rows.reward_absmax, rows.discount)
+    else:
+        scale = dp_scale(float(np.abs(rows.reward).max(initial=0.0)), rows.discount)
+    if not np.isfinite(scale):  # refused by FiniteMDP / from_arrays (MAX_VALUE_SCALE)
+        raise ValidationError(f"the value scale max|R| / (1 - discount) = {scale} overflows")
+    return DP_RTOL * scale
+
+
+def _initial(initial: Any, n: int) -> np.ndarray:
+    """The starting vector: zeros, or ``initial`` checked finite and copied (once)."""
+    if initial is None:
+        return np.zeros(n)
+    v = check_vector("initial", initial, n)
+    return v.copy() if v is initial else v
+
+
+def _check_callback(callback: Any) -> None:
+    if callback is not None and not callable(callback):
+        raise ValidationError(f"callback must be callable or None; got {callback!r}")
 
 
 def _policy_out(model: Model, rows: BellmanRows, policy_rows: np.ndarray) -> np.ndarray:
@@ -118,12 +135,16 @@ def _policy_out(model: Model, rows: BellmanRows, policy_rows: np.ndarray) -> np.
     return policy_rows
 
 
+def _check_policy(policy: Any, n: int) -> np.ndarray:
+    """A policy as an integer array of length ``n`` (index ranges are the caller's)."""
+    pol = check_array("policy", policy, integer=True)
+    if pol.shape != (n,) or pol.dtype.kind not in "iu":
+        raise ValidationError(f"a policy must be {n} integers; got {pol.shape} {pol.dtype}")
+    return pol
+
+
 def _policy_rows(model: Model, rows: BellmanRows, policy: Any) -> np.ndarray:
-    pol = np.asarray(policy)
-    if pol.shape != (rows.n_vars,) or not np.issubdtype(pol.dtype, np.integer):
-        raise ValidationError(
-            f"a policy must be {rows.n_vars} integers; got {pol.shape} {pol.dtype}"
-        )
+    pol = _check_policy(policy, rows.n_vars)
     if isinstance(model, FiniteMDP):
         if (pol < 0).any() or (pol >= model.n_actions).any():
             x = int(np.flatnonzero((pol < 0) | (pol >= model.n_actions))[0])
@@ -170,9 +191,15 @@ class DPResult:
         All sweeps over the rows, improvement and evaluation.
     seconds : float
     method : str
-    converged : bool
+    status : lpbounds.status.Status
+        ``OPTIMAL`` when ``residual <= tol`` (so ``error_bound`` holds at the requested
+        accuracy), ``ITERATION_LIMIT`` when the iteration stopped at ``max_iter``
+        (only returned with ``raise_on_failure=False``; ``values`` and ``error_bound``
+        are still valid, only wider).
     history : list of float
         The residual at each improvement step.
+    converged : bool
+        ``status is Status.OPTIMAL`` (a property: the status is the one source of truth).
     """
 
     values: np.ndarray
@@ -185,8 +212,13 @@ class DPResult:
     sweeps: int
     seconds: float
     method: str
-    converged: bool
+    status: Status
     history: list[float] = field(default_factory=list)
+
+    @property
+    def converged(self) -> bool:
+        """True when the residual reached ``tol`` (``status is Status.OPTIMAL``)."""
+        return self.status is Status.OPTIMAL
 
 
 @dataclass
@@ -258,17 +290,30 @@ def solve_exact(
         Called after each improvement step (progress bars).
     raise_on_failure : bool
         Raise :class:`~lpbounds.errors.ConvergenceError` at ``max_iter`` (default);
-        otherwise return with ``converged=False``.
+        otherwise return with ``status=Status.ITERATION_LIMIT`` (``converged=False``).
 
     Returns
     -------
     DPResult
+
+    Raises
+    ------
+    ValidationError
+        For a bad argument (checked once, before the first sweep): ``tol`` not a
+        positive finite number, ``initial`` of the wrong length or with a NaN/inf
+        entry, a non-integer ``max_iter``/``eval_sweeps``, an unknown method.
+    ConvergenceError
+        At ``max_iter`` with ``raise_on_failure``; or if the iterates overflow.
     """
     t0 = time.perf_counter()
     if method not in ("mpi", "vi", "pi"):
         raise ValidationError(f"unknown method {method!r}; use 'mpi', 'vi' or 'pi'")
-    if max_iter < 1 or eval_sweeps < 0:
-        raise ValidationError("max_iter must be >= 1 and eval_sweeps >= 0")
+    max_iter = check_int("max_iter", max_iter, lo=1)
+    eval_sweeps = check_int("eval_sweeps", eval_sweeps, lo=0)
+    extrapolate = check_bool("extrapolate", extrapolate)
+    raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
+    check_choice("evaluation", evaluation, ("auto", "direct", "iterative"))
+    _check_callback(callback)
     fast = post_decision_rows(model) if method != "pi" else None
     if fast is not None:
         return _solve_post_decision(
@@ -286,7 +331,7 @@ def solve_exact(
         )
     rows = exact_rows(model)
     tol_ = _default_tol(rows, tol)
-    v = np.zeros(rows.n_vars) if initial is None else rows._vec(initial).copy()
+    v = _initial(initial, rows.n_vars)
     if method == "pi":
         v, arg, res, its, sweeps, ok, hist = _policy_iteration(
             model, rows, v, tol_, max_iter, evaluation, callback
@@ -317,7 +362,19 @@ def _result(
     t0: float,
     raise_on_failure: bool,
 ) -> DPResult:
-    """The DPResult of a finished iteration, or ConvergenceError if it stopped short."""
+    """The DPResult of a finished iteration, or ConvergenceError if it stopped short.
+
+    The returned vector and its residual are checked once here (never per sweep): a
+    non-finite value (float64 overflow, e.g. from a huge but finite ``initial``) can
+    make the sweep's residual extremes meaningless, so it raises instead of being
+    reported with a residual.
+    """
+    vmax = float(np.abs(v).max(initial=0.0))
+    if not (np.isfinite(vmax) and np.isfinite(res)):
+        raise ConvergenceError(
+            f"{method} produced non-finite values (float64 overflow; max|V| = {vmax}, "
+            f"residual {res}): start from a smaller initial vector or rescale the rewards"
+        )
     if not ok and raise_on_failure:
         raise ConvergenceError(
             f"{method} stopped after {its} iterations with residual {res:.3e} > tol {tol:.3e}; "
@@ -328,13 +385,13 @@ def _result(
         policy=policy,
         policy_rows=policy_rows,
         residual=res,
-        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), discount),
+        error_bound=error_bound(res, vmax, discount),
         tol=tol,
         iterations=its,
         sweeps=sweeps,
         seconds=time.perf_counter() - t0,
         method=method,
-        converged=ok,
+        status=Status.OPTIMAL if ok else Status.ITERATION_LIMIT,
         history=hist,
     )
 
@@ -354,12 +411,7 @@ def _solve_post_decision(
 ) -> DPResult:
     """:func:`solve_exact` (VI/MPI) on the post-decision form; same iteration, same numbers."""
     tol_ = _default_tol(ps, tol)
-    if initial is None:
-        v = np.zeros(ps.n_vars)
-    else:
-        v = np.ascontiguousarray(initial, dtype=np.float64)
-        if v.shape != (ps.n_vars,):
-            raise ValidationError(f"expected a vector of length {ps.n_vars}; got {v.shape}")
+    v = _initial(initial, ps.n_vars)
     m = eval_sweeps if method == "mpi" else 0
     v, act, res, its, sweeps, ok, hist = _iterate(ps, v, tol_, max_iter, m, extrapolate, callback)
     return _result(
@@ -551,8 +603,13 @@ def solve_game(
         ``policy``/``policy_rows``: the minimising row of the first maximising action.
     """
     t0 = time.perf_counter()
+    if not isinstance(rows, BellmanRows):
+        raise ValidationError(f"rows must be a BellmanRows system; got {type(rows).__name__}")
     tol_ = _default_tol(rows, tol)
-    v = np.zeros(rows.n_vars) if initial is None else rows._vec(initial).copy()
+    max_iter = check_int("max_iter", max_iter, lo=1)
+    raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
+    _check_callback(callback)
+    v = _initial(initial, rows.n_vars)
     v, arg, res, its, sweeps, ok, hist = _iterate(
         rows, v, tol_, max_iter, 0, True, callback, game=True
     )
@@ -625,9 +682,7 @@ def _evaluate_post_decision(
 ) -> PolicyEvaluation:
     """Iterative policy evaluation on the post-decision form (actions, not rows)."""
     t0 = time.perf_counter()
-    pol = np.asarray(policy)
-    if pol.shape != (ps.n_vars,) or not np.issubdtype(pol.dtype, np.integer):
-        raise ValidationError(f"a policy must be {ps.n_vars} integers; got {pol.shape} {pol.dtype}")
+    pol = _check_policy(policy, ps.n_vars)
     bad = (pol < 0) | (pol >= mdp.n_actions)
     if bad.any():
         x = int(np.flatnonzero(bad)[0])
@@ -697,32 +752,39 @@ def greedy_policy(model: Model, values: Any, tie_rtol: float = GREEDY_TIE_RTOL) 
     Tie rule: every action whose Q-value is within
     ``tie_rtol * max(1, |max_u Q(x, u)|)`` of the maximum counts as tied, and the
     lowest action index among them is chosen (for a row system: the first row).
+
+    Raises
+    ------
+    ValidationError
+        If ``values`` has the wrong length or a NaN/inf entry (a NaN Q-value is never
+        a maximum: the policy would silently miss states), or ``tie_rtol`` is not a
+        finite number ``>= 0``.
     """
     rows = exact_rows(model)
-    sel, _ = _greedy_rows(rows, rows._vec(values), tie_rtol)
+    tie_rtol = check_real("tie_rtol", tie_rtol, lo=0.0)
+    sel, _ = _greedy_rows(rows, check_vector("values", values, rows.n_vars), tie_rtol)
     return _policy_out(model, rows, sel)
 
 
 def bellman_residual(model: Model, values: Any) -> float:
-    """``||T V - V||_inf``."""
+    """``||T V - V||_inf`` (``values`` must be finite: a NaN would be skipped by the max)."""
     ps = post_decision_rows(model)
     if ps is not None:
-        v = np.ascontiguousarray(values, dtype=np.float64)
-        if v.shape != (ps.n_vars,):
-            raise ValidationError(f"expected a vector of length {ps.n_vars}; got {v.shape}")
+        v = check_vector("values", values, ps.n_vars)
         out = np.empty_like(v)
         lo, hi = ps._sweep_max(v, out, ps.new_arg(), _nchunks())
         return max(-lo, hi)
     rows = exact_rows(model)
-    v = rows._vec(values)
+    v = check_vector("values", values, rows.n_vars)
     tv, _ = rows.apply_max(v)
     return float(np.abs(tv - v).max())
 
 
 def porteus_bounds(model: Model, values: Any) -> PorteusBounds:
-    """The Porteus bounds of :class:`PorteusBounds` for a candidate ``V``."""
+    """The Porteus bounds of :class:`PorteusBounds` for a candidate ``V`` (finite, else
+    :class:`~lpbounds.errors.ValidationError`)."""
     rows = exact_rows(model)
-    v = rows._vec(values)
+    v = check_vector("values", values, rows.n_vars)
     lam = rows.discount
     sel, tv = _greedy_rows(rows, v, GREEDY_TIE_RTOL)
     # the lower bounds use the chosen policy's own Q-values, so a tie within

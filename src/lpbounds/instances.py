@@ -25,6 +25,7 @@ loaded for its partition-level bounds.
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -35,6 +36,7 @@ from typing import Any
 from .errors import ValidationError
 from .mdp import FiniteMDP
 from .partition import Partition
+from .validation import check_bool, check_int, check_real
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -124,6 +126,8 @@ def check_keys(table: Mapping[str, Any], allowed: Mapping[str, Any], where: str)
 
     A default of ``...`` marks a required key.
     """
+    if not isinstance(table, Mapping):
+        raise ValidationError(f"[{where}] must be a table; got {table!r}")
     unknown = sorted(set(table) - set(allowed) - {"kind"})
     if unknown:
         raise ValidationError(f"unknown key(s) {unknown} in [{where}]; allowed: {sorted(allowed)}")
@@ -167,8 +171,10 @@ class Instance:
             table = self.config.get("partition")
             if table is None:
                 raise ValidationError(f"instance {self.name!r} has no [partition] table")
+            if not isinstance(table, Mapping):
+                raise ValidationError(f"[partition] must be a table; got {table!r}")
             kind = table.get("kind")
-            if kind not in PARTITION_KINDS:
+            if not isinstance(kind, str) or kind not in PARTITION_KINDS:
                 raise ValidationError(
                     f"unknown partition kind {kind!r}; known: {sorted(PARTITION_KINDS)}"
                 )
@@ -189,22 +195,35 @@ def load_instance(source: str | Path | Mapping[str, Any], name: str | None = Non
         Display name (default: the file's stem).
     """
     path: Path | None = None
+    if name is not None and not isinstance(name, str):
+        raise ValidationError(f"name must be a string or None; got {name!r}")
     if isinstance(source, Mapping):
         config = dict(source)
-    else:
+    elif isinstance(source, (str, os.PathLike)):
         path = resolve_instance_path(source)
-        try:
-            with path.open("rb") as fh:
-                config = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise ValidationError(f"{path}: not valid TOML: {exc}") from exc
+        config = _read_toml(path)
+    else:
+        raise ValidationError(
+            f"source must be a path, a model name or a mapping; got {type(source).__name__}"
+        )
     model = config.get("model")
     if not isinstance(model, Mapping) or "kind" not in model:
         raise ValidationError("an instance needs a [model] table with a 'kind'")
-    if model["kind"] not in MODEL_KINDS:
+    if not isinstance(model["kind"], str) or model["kind"] not in MODEL_KINDS:
         raise ValidationError(f"unknown model kind {model['kind']!r}; known: {sorted(MODEL_KINDS)}")
     display = name or (path.stem if path is not None else str(model["kind"]))
     return Instance(name=display, config=config, path=path)
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    """The parsed tables of an instance file (unreadable or invalid files: ValidationError)."""
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValidationError(f"{path}: not valid TOML: {exc}") from exc
+    except OSError as exc:
+        raise ValidationError(f"{path}: cannot read the instance file: {exc}") from exc
 
 
 # ---------------------------------------------------------------------- builders
@@ -225,15 +244,21 @@ def _build_garnet(table: Mapping[str, Any]) -> FiniteMDP:
     from .generators import garnet
 
     c = check_keys(table, _GARNET_KEYS, "model")
+    # the file's values are checked, never coerced (a "0.9" string or 10.7 states is an error)
     return garnet(
-        int(c["n_states"]),
-        int(c["n_actions"]),
-        int(c["branching"]),
-        float(c["discount"]),
-        int(c["seed"]),
-        shared_probabilities=bool(c["shared_probabilities"]),
-        reward_range=(float(c["reward_low"]), float(c["reward_high"])),
-        allowed_fraction=float(c["allowed_fraction"]),
+        check_int("[model] n_states", c["n_states"], lo=1),
+        check_int("[model] n_actions", c["n_actions"], lo=1),
+        check_int("[model] branching", c["branching"], lo=1),
+        check_real("[model] discount", c["discount"], lo=0.0, hi=1.0, hi_open=True),
+        check_int("[model] seed", c["seed"], lo=0),
+        shared_probabilities=check_bool("[model] shared_probabilities", c["shared_probabilities"]),
+        reward_range=(
+            check_real("[model] reward_low", c["reward_low"]),
+            check_real("[model] reward_high", c["reward_high"]),
+        ),
+        allowed_fraction=check_real(
+            "[model] allowed_fraction", c["allowed_fraction"], lo=0.0, hi=1.0, lo_open=True
+        ),
     )
 
 
@@ -241,4 +266,6 @@ def _build_random_partition(table: Mapping[str, Any], instance: Instance) -> Par
     from .generators import random_partition
 
     c = check_keys(table, {"n_partitions": ..., "seed": 0}, "partition")
-    return random_partition(instance.mdp().n_states, int(c["n_partitions"]), int(c["seed"]))
+    n_partitions = check_int("[partition] n_partitions", c["n_partitions"], lo=1)
+    seed = check_int("[partition] seed", c["seed"], lo=0)
+    return random_partition(instance.mdp().n_states, n_partitions, seed)

@@ -78,6 +78,14 @@ from . import _aggregate, _kernels
 from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
+from .validation import (
+    as_float_array,
+    check_array,
+    check_indices,
+    check_int,
+    check_value_scale,
+    check_vector,
+)
 
 __all__ = ["BellmanRows", "PostDecisionRows"]
 
@@ -142,28 +150,28 @@ class BellmanRows:
             If shapes disagree, an index is out of range, a row's probabilities are
             negative or do not sum to one, or some owner has no row.
         """
-        owner = np.asarray(owner)
+        n_vars = check_int("n_vars", n_vars, lo=1)
+        owner = check_array("owner", owner, integer=True, ndim=1)
         n_rows = owner.shape[0]
-        targets = np.asarray(targets)
+        targets = check_array("targets", targets, integer=True)
         if targets.ndim != 2 or targets.shape[0] != n_rows:
             raise ValidationError(f"targets must have shape ({n_rows}, L); got {targets.shape}")
-        probs = np.asarray(probs, dtype=np.float64)
+        probs = as_float_array("probs", probs)
         if probs.ndim == 1:
             probs = np.broadcast_to(probs, targets.shape)
         if probs.shape != targets.shape:
             raise ValidationError(f"probs must have shape {targets.shape}; got {probs.shape}")
-        reward = np.asarray(reward, dtype=np.float64)
-        action = np.asarray(action)
+        reward = as_float_array("reward", reward)
+        action = check_array("action", action, integer=True)
         if reward.shape != (n_rows,) or action.shape != (n_rows,):
             raise ValidationError("owner, action and reward must have the same length")
         lam = FiniteMDP._check_discount(discount)
-        for name, arr in (("owner", owner), ("targets", targets)):
-            if arr.size and (arr.min() < 0 or arr.max() >= n_vars):
-                raise ValidationError(f"{name} has an index outside [0, {n_vars})")
-        if not np.all(np.isfinite(reward)):
-            raise ValidationError("row rewards must be finite")
+        check_indices("owner", owner, n_vars)
+        check_indices("targets", targets, n_vars)
+        check_indices("action", action, np.iinfo(np.int32).max)
         if (probs < 0).any() or np.abs(probs.sum(axis=1) - 1).max(initial=0) > 1e-9:
             raise ValidationError("each row's probabilities must be >= 0 and sum to 1")
+        check_value_scale(float(np.abs(reward).max(initial=0.0)), lam, "reward")
         order = np.lexsort((action, owner))
         idt = index_dtype(n_vars)
         return cls._finish(
@@ -363,11 +371,10 @@ class BellmanRows:
         )
 
     # ------------------------------------------------------------------ operators
-    def _vec(self, v: Any) -> np.ndarray:
-        arr = np.ascontiguousarray(v, dtype=np.float64)
-        if arr.shape != (self.n_vars,):
-            raise ValidationError(f"expected a vector of length {self.n_vars}; got {arr.shape}")
-        return arr
+    def _vec(self, v: Any, name: str = "v") -> np.ndarray:
+        """``v`` as a float64 vector of length ``n_vars`` (dtype checked before the cast;
+        finiteness is the caller's check, done once at its boundary)."""
+        return check_vector(name, v, self.n_vars, finite=False)
 
     def q_values(self, v: Any) -> np.ndarray:
         """``q_r(v) = reward_r + discount * sum_l probs_{r,l} v(targets_{r,l})`` per row."""
