@@ -13,6 +13,7 @@ import numpy as np
 
 from ..dp import exact_rows
 from ..mdp import FiniteMDP
+from ..validation import check_formulation_inputs
 from .rows_lp import RowsLP
 
 __all__ = ["ELP"]
@@ -37,6 +38,7 @@ class ELP(RowsLP):
     name = "ELP"
 
     def __init__(self, mdp: FiniteMDP, cost: Any = None) -> None:
+        check_formulation_inputs(mdp, cost=cost)
         self.mdp = mdp
         super().__init__(exact_rows(mdp), cost)
 

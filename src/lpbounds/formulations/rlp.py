@@ -20,6 +20,7 @@ import numpy as np
 from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
+from ..validation import check_formulation_inputs
 from .base import aggregated_cost
 from .rows_lp import RowsLP
 
@@ -59,6 +60,7 @@ class RLP(RowsLP):
         partition_cost: Any = None,
         rows: BellmanRows | None = None,
     ) -> None:
+        check_formulation_inputs(mdp, partition, cost=cost, partition_cost=partition_cost)
         cbar = aggregated_cost(mdp, partition, cost, partition_cost)
         self.mdp = mdp
         self.partition = partition

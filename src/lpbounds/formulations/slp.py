@@ -46,6 +46,7 @@ from ..errors import ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
+from ..validation import check_formulation_inputs
 from .base import LPResult, aggregated_cost
 from .rows_lp import RowsLP
 
@@ -120,6 +121,7 @@ class SLP(RowsLP):
     name = "SLP"
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, mu: Any, cost: Any = None) -> None:
+        check_formulation_inputs(mdp, partition, cost=cost, mu=None if isinstance(mu, str) else mu)
         cbar = aggregated_cost(mdp, partition, cost, None)
         self.mdp = mdp
         self.partition = partition
