@@ -24,6 +24,7 @@ from ..certificate import Certificate, certify
 from ..dp import exact_rows
 from ..errors import ValidationError
 from ..mdp import FiniteMDP
+from ..validation import check_formulation_inputs
 from .base import Formulation, LPResult, check_cost
 
 __all__ = ["ALP", "CostDependenceExample", "find_cost_dependent_alp", "soft_aggregation_basis"]
@@ -81,6 +82,7 @@ class ALP(Formulation):
     upper_side_only = True
 
     def __init__(self, mdp: FiniteMDP, basis: Any, cost: Any = None) -> None:
+        check_formulation_inputs(mdp, cost=cost, basis=basis)
         self.mdp = mdp
         self.basis = _check_basis(basis, mdp.n_states)
         c = check_cost(cost, mdp.n_states)

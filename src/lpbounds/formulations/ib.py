@@ -17,6 +17,7 @@ from ..errors import ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
+from ..validation import check_formulation_inputs
 from .base import Formulation, check_cost
 from .rows_lp import RowsLP
 
@@ -66,6 +67,7 @@ class IB(RowsLP):
     name = "IB"
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, L: int, cost: Any = None) -> None:
+        check_formulation_inputs(mdp, partition, cost=cost)
         _check_partition(mdp, partition)
         if isinstance(L, bool) or not isinstance(L, (int, np.integer)) or L < 1:
             raise ValidationError(f"L must be an integer >= 1; got {L!r}")
@@ -172,6 +174,7 @@ class LLP(Formulation):
     upper_side_only = True
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, d: Any, cost: Any = None) -> None:
+        check_formulation_inputs(mdp, partition, cost=cost, d=d)
         _check_partition(mdp, partition)
         self.mdp = mdp
         self.partition = partition
