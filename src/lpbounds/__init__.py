@@ -12,6 +12,7 @@ Data flows one way: model (:class:`FiniteMDP`, :class:`Partition`) -> Bellman ro
 
 from __future__ import annotations
 
+from .certificate import Certificate, certify
 from .dp import (
     DPResult,
     PolicyEvaluation,
@@ -35,11 +36,13 @@ from .instances import Instance, load_instance
 from .mdp import FiniteMDP
 from .partition import Partition
 from .rows import BellmanRows
+from .status import Status, Verdict
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BellmanRows",
+    "Certificate",
     "ConvergenceError",
     "DPResult",
     "FiniteMDP",
@@ -49,10 +52,13 @@ __all__ = [
     "PolicyEvaluation",
     "PorteusBounds",
     "SolverError",
+    "Status",
     "SolverNotInstalledError",
     "ValidationError",
+    "Verdict",
     "__version__",
     "bellman_residual",
+    "certify",
     "evaluate_policy",
     "garnet",
     "greedy_policy",

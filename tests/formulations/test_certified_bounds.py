@@ -189,3 +189,21 @@ def test_alp_upper_values_bound_vstar(solver):
     assert res.status.has_point
     assert (res.upper_values >= vstar - err).all()
     assert (res.lower_values <= vstar + err).all()
+
+
+def test_a_feasible_but_suboptimal_point_is_inaccurate_not_optimal():
+    """A solver claiming OPTIMAL for a feasible point 1e-3 above the optimum (what a
+    loosened optimality tolerance gave) is judged INACCURATE: optimality is certified,
+    not only feasibility."""
+    from lpbounds.formulations.base import _Run
+    from lpbounds.status import Status
+
+    mdp = lb.garnet(30, 3, 3, 0.9, seed=2)
+    succ, probs = mdp.successors, mdp.probabilities_full()
+    vstar, err = _vstar(succ, probs, mdp.rewards, mdp.allowed, 0.9)
+    form = ELP(mdp)
+    for shift, expected in ((1e-3, Status.INACCURATE), (0.0, Status.OPTIMAL)):
+        run = _Run("HIGHS", {}, Status.OPTIMAL, "optimal", vstar + shift, None, 0.0, 0.0, None)
+        res = form._judge(run, 1e-6)
+        assert res.status is expected
+        assert (res.upper_values >= vstar - err).all() and (res.lower_values <= vstar + err).all()

@@ -25,6 +25,7 @@ rows, the duals spread over (state, action) pairs are the paper's ``mu_u^i(x)``.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -426,7 +427,10 @@ class Formulation:
         """Call the solver through cvxpy; map its status; keep any point it returned."""
         t0 = time.perf_counter()
         try:
-            self.problem.solve(solver=name, verbose=verbose, **options)
+            with warnings.catch_warnings():
+                # cvxpy's "Solution may be inaccurate": the certificate judges that instead
+                warnings.filterwarnings("ignore", message="Solution may be inaccurate")
+                self.problem.solve(solver=name, verbose=verbose, **options)
         except cp.SolverError as exc:
             return _Run(name, options, Status.SOLVER_ERROR, str(exc), None, None, 0.0,
                         time.perf_counter() - t0, None)  # fmt: skip
