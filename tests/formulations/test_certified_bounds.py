@@ -29,7 +29,7 @@ def _q(succ, probs, rewards, discount, v):
 
 def _vstar(succ, probs, rewards, allowed, discount):
     """``(V*, err)`` by dense policy iteration in numpy; ``err`` bounds ``|V - V*|``."""
-    n, n_act, _ = succ.shape
+    n = succ.shape[0]
     masked = np.where(allowed, rewards, -np.inf)
     pol = np.argmax(masked, axis=1)
     for _ in range(500):
