@@ -36,7 +36,7 @@ def test_solve_bad_model_exits_with_one_clear_line(tmp_path, capsys):
     bad.write_text(
         '[model]\nkind = "garnet"\nn_states = 3\nn_actions = 1\nbranching = 1\ndiscount = 1.2\n'
     )
-    assert main(["solve", str(bad)]) == 1
+    assert main(["solve", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "discount must lie in [0, 1)" in err and "Traceback" not in err
 

@@ -27,3 +27,11 @@ class SolverNotInstalledError(LPBoundsError, ImportError):
 
 class ConvergenceError(LPBoundsError, RuntimeError):
     """An iterative method stopped at its iteration limit before reaching its tolerance."""
+
+
+class OutputError(LPBoundsError, OSError):
+    """An output that cannot be written: not writable, of the wrong kind, or locked."""
+
+
+class ConsistencyError(LPBoundsError, RuntimeError):
+    """Two computations of the same quantity disagree: a defect, not a user error."""

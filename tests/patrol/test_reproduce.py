@@ -4,8 +4,12 @@ plain loops over states), plus the command line."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import subprocess
+import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +32,7 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("reproduce")
+    out = tmp_path_factory.mktemp("reproduce") / "out"
     rep = reproduce(SMALL, out, seeds=SEEDS, n_steps=STEPS, general="aggregate")
     return rep
 
@@ -242,7 +246,60 @@ def test_cli(tmp_path, capsys):
     assert code == 0
     assert (out / "summary.json").exists() and (out / "report.md").exists()
     assert "reproduction of patrol-small" in capsys.readouterr().out
-    assert main(["reproduce", SMALL, "--out", str(out), "--solver", "NOSUCH"]) == 1
+    before = (out / "summary.json").read_bytes()
+    # input errors: exit status 2, one line, and the previous output untouched
+    assert main(["reproduce", SMALL, "--out", str(out), "--solver", "NOSUCH"]) == 2
     assert "NOSUCH" in capsys.readouterr().err
-    assert main(["reproduce", "models/garnet-small.toml", "--out", str(out)]) == 1
+    assert main(["reproduce", "models/garnet-small.toml", "--out", str(out)]) == 2
     assert "patrol" in capsys.readouterr().err
+    assert (out / "summary.json").read_bytes() == before
+
+
+def test_manifest_lists_every_file_with_size_and_hash(run):
+    """manifest.json names every other file of the folder, with its size and SHA-256
+    recomputed here, and the package version."""
+    import lpbounds
+
+    man = json.loads((run.out / "manifest.json").read_text())
+    assert man["version"] == lpbounds.__version__ and man["instance"] == "patrol-small"
+    on_disk = {p.name for p in run.out.iterdir()} - {"manifest.json"}
+    assert {f["name"] for f in man["files"]} == on_disk
+    for f in man["files"]:
+        data = (run.out / f["name"]).read_bytes()
+        assert f["bytes"] == len(data)
+        assert f["sha256"] == hashlib.sha256(data).hexdigest()
+    # nothing but the output folder is left beside it (no temporary folder, no lock)
+    assert [p.name for p in run.out.parent.iterdir()] == [run.out.name]
+
+
+def test_summary_json_is_the_typed_result(run):
+    """summary.json holds exactly the typed objects the report reads."""
+    from lpbounds.patrol.summary import jsonable
+
+    on_disk = json.loads((run.out / "summary.json").read_text())
+    assert on_disk == json.loads(json.dumps(jsonable(run.result)))
+    assert run.result.sandwich.lower.margin == on_disk["sandwich"]["lower"]["margin"]
+    assert run.result.monte_carlo.pi_s.mean_delay == on_disk["monte_carlo"]["pi_s"]["mean_delay"]
+
+
+def test_reproduce_after_a_default_highs_solve_in_the_same_process(tmp_path):
+    """HiGHS keeps one thread scheduler per process: an option that asks for another
+    thread count fails every solve after the first. Solve an LP with HiGHS at its
+    defaults first (as a notebook or another test would), then reproduce, in one fresh
+    process; the LP's optimum is checked against its closed form (x = 1, y = 2: 5)."""
+    code = textwrap.dedent(
+        f"""
+        import cvxpy as cp
+        x, y = cp.Variable(), cp.Variable()
+        prob = cp.Problem(cp.Maximize(x + 2 * y), [x + y <= 3, y <= 2, x >= 0, y >= 0])
+        prob.solve(solver="HIGHS")
+        assert abs(prob.value - 5.0) < 1e-9, prob.value
+        from lpbounds.patrol.reproduce import reproduce
+        rep = reproduce({SMALL!r}, {str(tmp_path / "o")!r}, seeds=(1,), n_steps=200,
+                        figures=False)
+        print([b.status for b in rep.result.bounds.values()])
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.strip().splitlines()[-1] == "['optimal', 'optimal']"

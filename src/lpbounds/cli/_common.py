@@ -1,13 +1,29 @@
-"""Helpers shared by the subcommands: console, progress bars, instance argument."""
+"""Helpers shared by the subcommands: console, progress bars, instance argument, argument
+types that reject bad values at parse time, and output checks made before any work."""
 
 from __future__ import annotations
 
 import argparse
+import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 
 from rich.console import Console
 from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+from ..outputs import check_output_dir, check_output_file
+
+__all__ = [
+    "add_model_argument",
+    "check_output_dir",
+    "check_output_file",
+    "console",
+    "err_console",
+    "nonnegative_int",
+    "positive_float",
+    "positive_int",
+    "progress",
+]
 
 console = Console()
 err_console = Console(stderr=True)
@@ -29,12 +45,46 @@ def progress(transient: bool = True) -> Iterator[Progress]:
 
 
 def add_model_argument(parser: argparse.ArgumentParser, default: str | None = None) -> None:
-    """The positional MODEL argument (a TOML path or a name in models/)."""
+    """The positional MODEL argument (a TOML path or a packaged model's name)."""
     kwargs = {"nargs": "?", "default": default} if default is not None else {}
     parser.add_argument(
         "model",
         metavar="MODEL",
-        help="instance file (models/*.toml) or its name"
+        help="instance file (models/*.toml) or the name of a packaged model"
         + (f" (default: {default})" if default else ""),
         **kwargs,
     )
+
+
+def _int(text: str) -> int:
+    try:
+        return int(text, 10)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+
+
+def positive_int(text: str) -> int:
+    """An argparse type: an integer >= 1."""
+    value = _int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1; got {value}")
+    return value
+
+
+def nonnegative_int(text: str) -> int:
+    """An argparse type: an integer >= 0 (seeds, counts)."""
+    value = _int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0; got {value}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """An argparse type: a finite number > 0 (tolerances, limits)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0; got {text}")
+    return value

@@ -26,8 +26,15 @@ from rich.table import Table
 from ..dp import solve_exact
 from ..errors import SolverError, ValidationError
 from ..instances import load_instance
+from ..outputs import write_text_atomic
 from ..tolerances import LP_COMPARE_RTOL
-from ._common import add_model_argument, console, progress
+from ._common import (
+    add_model_argument,
+    check_output_file,
+    console,
+    nonnegative_int,
+    progress,
+)
 
 WORST = 10
 
@@ -43,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--lp", action="store_true", help="solve the LPs whatever the size")
     p.add_argument(
         "--lp-max-partitions",
-        type=int,
+        type=nonnegative_int,
         default=50_000,
         help="above this M the LPs are skipped unless --lp (default 50,000)",
     )
@@ -62,6 +69,8 @@ def run(args: argparse.Namespace) -> int:
 
     inst = load_instance(args.model)
     params = params_from_instance(inst)
+    if args.json:
+        check_output_file(args.json, "--json")
     out: dict[str, Any] = {
         "instance": inst.name,
         "n_states": params.n_states,
@@ -158,8 +167,7 @@ def run(args: argparse.Namespace) -> int:
     out["peak_rss_mb"] = _peak_mb()
     _print(out, params)
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+        write_text_atomic(args.json, json.dumps(out, indent=2))
     bad = [k for k in ("UBLP", "LBLP") if "lp" in out[k] and not out[k]["lp"]["agrees"]]
     if out["gap"]["negative_count"]:
         console.print("[red]the lower bound exceeds the upper bound somewhere[/red]")

@@ -2,6 +2,9 @@
 
 Each subcommand lives in its own module ``lpbounds.cli.<name>`` with a function
 ``register(subparsers)`` that adds its parser and sets ``func(args) -> int``.
+
+A user error never shows a traceback: :func:`main` turns it into one line on stderr and
+an exit status (:data:`EXIT_CODES`, also in ``lpbounds --help``).
 """
 
 from __future__ import annotations
@@ -11,10 +14,29 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from ..errors import LPBoundsError
+from ..errors import LPBoundsError, OutputError, SolverNotInstalledError, ValidationError
 
 #: Subcommand modules, in the order ``lpbounds --help`` lists them.
 COMMANDS: tuple[str, ...] = ("solve", "verify", "bounds", "reproduce", "compare")
+
+EXIT_OK = 0
+#: A computation failed: a solver error, no convergence, two results that disagree.
+EXIT_FAILED = 1
+#: A usage or input error: bad arguments, an invalid or unreadable model, an output that
+#: cannot be written (checked before any computation) or is locked by another run.
+EXIT_USAGE = 2
+#: Interrupted (Ctrl-C): outputs are as they were before the run.
+EXIT_INTERRUPTED = 130
+
+EXIT_CODES: dict[int, str] = {
+    EXIT_OK: "success",
+    EXIT_FAILED: "a computation failed (solver error, no convergence, inconsistent results)",
+    EXIT_USAGE: "usage or input error: bad arguments, invalid or unreadable model file, "
+    "output not writable or locked (checked before any computation)",
+    EXIT_INTERRUPTED: "interrupted (Ctrl-C); earlier outputs are left as they were",
+}
+
+EPILOG = "exit status:\n" + "\n".join(f"  {code:<4} {text}" for code, text in EXIT_CODES.items())
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -24,6 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="lpbounds",
         description="Bound discounted MDPs with linear programs (Park et al.).",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"lpbounds {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -38,18 +62,40 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def exit_status(exc: BaseException) -> int:
+    """The exit status of an exception that ends a command (see :data:`EXIT_CODES`)."""
+    if isinstance(exc, KeyboardInterrupt):
+        return EXIT_INTERRUPTED
+    if isinstance(exc, ValidationError | SolverNotInstalledError | OutputError | OSError):
+        return EXIT_USAGE
+    return EXIT_FAILED
+
+
+def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and not isinstance(exc, LPBoundsError) and exc.strerror:
+        where = f": {exc.filename!r}" if exc.filename else ""
+        return f"{exc.strerror}{where}"
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (errors print one clear line)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
+    command = "lpbounds"
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return EXIT_USAGE
+        command = f"lpbounds {args.command}"
         return int(args.func(args) or 0)
-    except LPBoundsError as exc:
-        print(f"lpbounds {args.command}: error: {exc}", file=sys.stderr)
-        return 1
+    except KeyboardInterrupt:
+        print(f"{command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except (LPBoundsError, OSError) as exc:
+        print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
+        return exit_status(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

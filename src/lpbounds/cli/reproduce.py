@@ -1,7 +1,9 @@
 """``lpbounds reproduce [MODEL]``: the paper's patrol results in one command.
 
-Writes ``summary.json``, ``values.npz``, ``report.md`` and Figures 2-7 into ``--out``
-(see :mod:`lpbounds.patrol.reproduce`) and prints the headline numbers.
+Writes ``summary.json``, ``values.npz``, ``report.md``, Figures 2-7 and ``manifest.json``
+into ``--out`` (see :mod:`lpbounds.patrol.reproduce`) and prints the headline numbers.
+The model, the arguments and ``--out`` are checked before any computation; ``--out``
+appears complete or not at all (a previous output stays until the new one is complete).
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ import argparse
 from rich.table import Table
 
 from ..patrol.reproduce import DEFAULT_MODEL, DEFAULT_OUT, DEFAULT_SEEDS, reproduce
-from ._common import add_model_argument, console, progress
+from ._common import add_model_argument, console, nonnegative_int, positive_int, progress
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -20,17 +22,24 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         help="reproduce the paper's patrol results (Sections 4-6): report, figures, data",
     )
     add_model_argument(p, default=DEFAULT_MODEL)
-    p.add_argument("--out", default=DEFAULT_OUT, help=f"output folder (default: {DEFAULT_OUT})")
+    p.add_argument(
+        "--out",
+        default=DEFAULT_OUT,
+        help=f"output folder, replaced as a whole when the run completes (default: {DEFAULT_OUT})",
+    )
     p.add_argument(
         "--seeds",
-        type=int,
+        type=nonnegative_int,
         nargs="+",
         default=list(DEFAULT_SEEDS),
         metavar="SEED",
         help="Monte Carlo seeds, one alert sequence each (default: 1 2 3 4 5)",
     )
     p.add_argument(
-        "--steps", type=int, default=60_000, help="Monte Carlo steps per seed (default: 60000)"
+        "--steps",
+        type=positive_int,
+        default=60_000,
+        help="Monte Carlo steps per seed (default: 60000)",
     )
     p.add_argument(
         "--solver", default="HIGHS", help="LP solver for UBLP/LBLP: HIGHS (default) or CLARABEL"
@@ -59,38 +68,38 @@ def run(args: argparse.Namespace) -> int:
             figures=not args.no_figures,
             progress=prog,
         )
-    s = rep.summary
-    t = Table(title=f"reproduction of {s['instance']}", show_header=False)
-    t.add_row("|S|, M", f"{s['n_states']:,}, {s['n_partitions']:,}")
-    v = s["vstar"]
-    t.add_row("V*", f"{v['iterations']} iterations, residual {v['residual']:.1e}")
-    t.add_row("Theorem 4 |RLP - UBLP|", f"{s['theorem4_max_abs_diff']:.2e}")
-    t.add_row("Theorem 3 |NLP - LBLP|", f"{s['theorem3_max_abs_diff']:.2e}")
-    c = s["claims"]
+    s = rep.result
+    t = Table(title=f"reproduction of {s.instance}", show_header=False)
+    t.add_row("|S|, M", f"{s.n_states:,}, {s.n_partitions:,}")
+    v = s.vstar
+    t.add_row("V*", f"{v.iterations} iterations, residual {v.residual:.1e}")
+    t.add_row("Theorem 4 |RLP - UBLP|", f"{s.theorem4_max_abs_diff:.2e}")
+    t.add_row("Theorem 3 |NLP - LBLP|", f"{s.theorem3_max_abs_diff:.2e}")
+    c = s.claims
     t.add_row(
         "Claim 2 violations",
-        f"{c['violations']:,} of {c['pairs']:,} pairs "
-        f"({c['violations_same_alert_status']} with the same alert status); "
-        f"partitions {c['partition_violations']} of {c['partition_pairs']:,}",
+        f"{c.violations:,} of {c.pairs:,} pairs "
+        f"({c.violations_same_alert_status} with the same alert status); "
+        f"partitions {c.partition_violations} of {c.partition_pairs:,}",
     )
-    sw = s["sandwich"]
-    t.add_row("sandwich margins", f"lower {sw['lower_margin']:.3e}, upper {sw['upper_margin']:.3e}")
-    po = s["policy"]
+    sw = s.sandwich
+    t.add_row("sandwich margins", f"lower {sw.lower_margin:.3e}, upper {sw.upper_margin:.3e}")
+    po = s.policy
     t.add_row(
         "pi_s",
-        f"differs on {100 * po['differs_fraction']:.2f} % of states, "
-        f"max V* - V_sub = {po['max_vstar_minus_vsub']:.2e}",
+        f"differs on {100 * po.differs_fraction:.2f} % of states, "
+        f"max V* - V_sub = {po.max_vstar_minus_vsub:.2e}",
     )
     for key, label in (("pi_star", "pi*"), ("pi_s", "pi_s")):
-        m = s["monte_carlo"][key]
-        p = s["paper_table1"][key]
+        m = s.monte_carlo.policy(key)
+        p = s.paper_table1[key]
         t.add_row(
             f"Monte Carlo {label}",
-            f"loiters {m['mean_loiters']:.2f} ({p['mean_loiters']}), "
-            f"delay {m['mean_delay']:.2f} ({p['mean_delay']}), "
-            f"worst {m['worst_delay']} ({p['worst_delay']})  [paper in brackets]",
+            f"loiters {m.mean_loiters:.2f} ({p['mean_loiters']}), "
+            f"delay {m.mean_delay:.2f} ({p['mean_delay']}), "
+            f"worst {m.worst_delay} ({p['worst_delay']})  [paper in brackets]",
         )
-    t.add_row("total", f"{s['seconds_total']:.1f} s")
+    t.add_row("total", f"{s.seconds_total:.1f} s")
     t.add_row("written", str(rep.out))
     console.print(t)
     return 0

@@ -12,21 +12,31 @@ from rich.table import Table
 
 from ..dp import solve_exact
 from ..instances import load_instance
-from ._common import add_model_argument, console, progress
+from ..outputs import write_text_atomic
+from ._common import (
+    add_model_argument,
+    check_output_file,
+    console,
+    positive_float,
+    positive_int,
+    progress,
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser("solve", help="solve an instance exactly (VI / PI / MPI)")
     add_model_argument(p)
     p.add_argument("--method", choices=("mpi", "vi", "pi"), default="mpi")
-    p.add_argument("--tol", type=float, default=None, help="residual tolerance (absolute)")
-    p.add_argument("--max-iter", type=int, default=100_000)
+    p.add_argument("--tol", type=positive_float, default=None, help="residual tolerance (absolute)")
+    p.add_argument("--max-iter", type=positive_int, default=100_000)
     p.add_argument("--json", metavar="PATH", help="also write the statistics as JSON")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     inst = load_instance(args.model)
+    if args.json:
+        check_output_file(args.json, "--json")
     t0 = time.perf_counter()
     with progress() as prog:
         task = prog.add_task(f"building {inst.name}", total=None, status="")
@@ -71,6 +81,5 @@ def run(args: argparse.Namespace) -> int:
     )
     console.print(table)
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(stats, fh, indent=2)
+        write_text_atomic(args.json, json.dumps(stats, indent=2))
     return 0

@@ -1,7 +1,8 @@
 """``report.md`` of a reproduction: every table and figure beside the paper's statement.
 
-Built from the summary dictionary of :func:`lpbounds.patrol.reproduce.reproduce` only, so
-the report never shows a number that is not also in ``summary.json``.
+Built from the typed summary of :func:`lpbounds.patrol.reproduce.reproduce` only (the
+objects ``summary.json`` is written from), so the report never shows a number that is
+not also in ``summary.json``.
 """
 
 from __future__ import annotations
@@ -9,6 +10,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 from typing import Any
+
+from .summary import ClaimsSummary, Inequality, Summary
 
 __all__ = ["markdown_table", "monte_carlo_table", "write_report"]
 
@@ -39,19 +42,19 @@ def markdown_table(header: list[str], rows: list[list[Any]]) -> str:
     return "\n".join(out)
 
 
-def monte_carlo_table(summary: dict[str, Any]) -> str:
+def monte_carlo_table(summary: Summary) -> str:
     """Table 1 beside the Monte Carlo (pooled over seeds; per-seed spread in brackets)."""
-    mc, paper = summary["monte_carlo"], summary["paper_table1"]
+    mc, paper = summary.monte_carlo, summary.paper_table1
     rows = []
     for key, label in (("pi_star", "π*"), ("pi_s", "π_s")):
-        s, p = mc[key], paper[key]
+        st, p = mc.policy(key), paper[key]
         rows.append(
             [
                 label,
-                f"{s['mean_loiters']:.2f} (paper {p['mean_loiters']})",
-                f"{s['mean_delay']:.2f} ± {s['std_mean_delay']:.2f} (paper {p['mean_delay']})",
-                f"{s['worst_delay']} (paper {p['worst_delay']})",
-                s["n_serviced"],
+                f"{st.mean_loiters:.2f} (paper {p['mean_loiters']})",
+                f"{st.mean_delay:.2f} ± {st.std_mean_delay:.2f} (paper {p['mean_delay']})",
+                f"{st.worst_delay} (paper {p['worst_delay']})",
+                st.n_serviced,
             ]
         )
     return markdown_table(
@@ -74,374 +77,355 @@ def _img(files: dict[str, Path], key: str, out: Path, caption: str) -> str:
     return f"![{caption}]({rel.as_posix()})"
 
 
-def write_report(summary: dict[str, Any], files: dict[str, Path], path: str | Path) -> Path:
-    """Write ``report.md`` next to the figures and return its path."""
+def write_report(summary: Summary, files: dict[str, Path], path: str | Path) -> Path:
+    """Write ``report.md`` next to the figures and return its path.
+
+    One function per section, each reading the typed objects that ``summary.json`` is
+    written from (:class:`lpbounds.patrol.summary.Summary`).
+    """
     path = Path(path)
     out = path.parent
-    s = summary
-    c, v, b, t = s["counts"], s["vstar"], s["bounds"], s["theorems"]
-    cl, sw, po, mc = s["claims"], s["sandwich"], s["policy"], s["monte_carlo"]
-    pr = s["params"]
-    L: list[str] = []
-    add = L.append
-    add(f"# Reproduction of Park et al., Sections 4-6, on `{s['instance']}`\n")
-    add(
+    parts = [
+        _header(summary),
+        _section_size(summary),
+        _section_bounds(summary),
+        _section_claims(summary, files, out),
+        _section_sandwich(summary, files, out),
+        _section_monte_carlo(summary, files, out),
+        _section_times(summary),
+    ]
+    path.write_text("\n".join(line for part in parts for line in part) + "\n")
+    return path
+
+
+def _header(s: Summary) -> list[str]:
+    pr = s.params
+    return [
+        f"# Reproduction of Park et al., Sections 4-6, on `{s.instance}`\n",
         f"Parameters: N = {pr['N']}, stations = {pr['stations']}, D = {pr['D']}, "
         f"Gamma = {pr['Gamma']}, rho = {pr['rho']}, lambda = {pr['discount']}, "
         f"alpha = {pr['alpha']:.6g}, allow_empty_loiter = {pr['allow_empty_loiter']}. "
-        f"Run on {s['machine']['platform']} ({s['machine']['cpus']} CPUs), {s['date']}; "
-        f"total {s.get('seconds_total', float('nan')):.1f} s.\n"
-    )
-    add("Figures are numbered as in the paper's source (Figure 1 is the scenario sketch).\n")
+        f"Run on {s.machine['platform']} ({s.machine['cpus']} CPUs), {s.date}; "
+        f"total {s.seconds_total:.1f} s.\n",
+        "Figures are numbered as in the paper's source (Figure 1 is the scenario sketch).\n",
+    ]
 
-    # 1
-    add("## 1. Problem size and the exact solution\n")
-    add(
+
+def _section_size(s: Summary) -> list[str]:
+    c, v = s.counts, s.vstar
+    return [
+        "## 1. Problem size and the exact solution\n",
         "*Paper (Sec. 5-6):* |S| = 2,048,000 (eq. 27) and M = 8,900 partitions (eq. 28) "
-        "for the example; V* is computed exactly.\n"
-    )
-    add(
+        "for the example; V* is computed exactly.\n",
         markdown_table(
             ["quantity", "eq. (27)/(28)", "counted", "paper (example)"],
             [
-                ["|S|", c["n_states_eq27"], c["n_states_counted"], c["paper"]["n_states"]],
-                [
-                    "M",
-                    c["n_partitions_eq28"],
-                    c["n_partitions_counted"],
-                    c["paper"]["n_partitions"],
-                ],
+                ["|S|", c.n_states_eq27, c.n_states_counted, c.paper["n_states"]],
+                ["M", c.n_partitions_eq28, c.n_partitions_counted, c.paper["n_partitions"]],
             ],
-        )
-    )
-    add("")
-    add(
-        f"V* by {v['method']}: {v['iterations']} improvement steps ({v['sweeps']} sweeps), "
-        f"Bellman residual ||TV - V|| = {_fmt(v['residual'])}, so ||V - V*|| <= "
-        f"{_fmt(v['error_bound'])}; {v['seconds']:.2f} s. V* ranges over "
-        f"[{v['min']:.4f}, {v['max']:.4f}]. Optimal actions: {v['policy_counts']}.\n"
-    )
+        ),
+        "",
+        f"V* by {v.method}: {v.iterations} improvement steps ({v.sweeps} sweeps), "
+        f"Bellman residual ||TV - V|| = {_fmt(v.residual)}, so ||V - V*|| <= "
+        f"{_fmt(v.error_bound)}; {v.seconds:.2f} s. V* ranges over "
+        f"[{v.min:.4f}, {v.max:.4f}]. Optimal actions: {v.policy_counts}.\n",
+    ]
 
-    # 2
-    add("## 2. UBLP and LBLP; Theorems 3 and 4; Lemma 3\n")
-    add(
-        "*Paper:* RLP collapses to UBLP (Theorem 4; type-1 loiter successor taubar = 2) and "
-        "the disjunctive NLP to LBLP (Theorem 3; successor taubar = taubar + 1).\n"
-    )
-    add(
-        markdown_table(
-            [
-                "LP",
-                "solver",
-                "status",
-                "rows",
-                "primal residual",
-                "|LP - fixed point|",
-                "fixed-point error bound",
-                "solve s",
-            ],
-            [
-                [
-                    k.upper(),
-                    x["solver"],
-                    x["status"],
-                    x["n_rows"],
-                    x["primal_residual"],
-                    x["lp_minus_fixed_point_max_abs"],
-                    x["fixed_point_error_bound"],
-                    x["solve_seconds"],
-                ]
-                for k, x in b.items()
-            ],
-        )
-    )
-    add("")
+
+def _section_bounds(s: Summary) -> list[str]:
+    b, t, lem = s.bounds, s.theorems, s.lemma3
+    aggregate = t.method == "aggregate"
     how = (
         "aggregated rows of the full MDP solved exactly (RLP: fixed point of the max, NLP: "
         "max-min game value)"
-        if t["method"] == "aggregate"
+        if aggregate
         else "a certified bound from one sweep of the general operators at UBLP's/LBLP's optima"
     )
-    add(
-        markdown_table(
+    lp_table = markdown_table(
+        [
+            "LP",
+            "solver",
+            "status",
+            "rows",
+            "primal residual",
+            "|LP - fixed point|",
+            "fixed-point error bound",
+            "solve s",
+        ],
+        [
             [
-                "check",
-                "max |difference|" if t["method"] == "aggregate" else "bound on max |difference|",
-                "tolerance",
-                "operator residual (bound / (1-λ))",
-            ],
-            [
-                [
-                    "Theorem 4: RLP(full MDP) = UBLP",
-                    t["theorem4_max_abs_diff"],
-                    t["tolerance_theorem4"],
-                    f"{_fmt(t['rlp_residual'])} ({_fmt(t['rlp_distance_bound'])})",
-                ],
-                [
-                    "Theorem 3: NLP(full MDP) = LBLP",
-                    t["theorem3_max_abs_diff"],
-                    t["tolerance_theorem3"],
-                    f"{_fmt(t['nlp_residual'])} ({_fmt(t['nlp_distance_bound'])})",
-                ],
-            ],
-        )
+                k.upper(),
+                x.solver,
+                x.status,
+                x.n_rows,
+                x.primal_residual,
+                x.lp_minus_fixed_point_max_abs,
+                x.fixed_point_error_bound,
+                x.solve_seconds,
+            ]
+            for k, x in b.items()
+        ],
     )
-    add(f"\nMethod: {how}.\n")
-    lem = s["lemma3"]
-    add(
-        f"Lemma 3: |T(i,u)| from the partition-level construction equals the paper's formula "
-        f"on {lem['pairs'] - lem['pairs_differing']:,} of {lem['pairs']:,} allowed "
-        f"(partition, action) pairs; it differs on {lem['pairs_differing']} pairs, all of "
-        f"them type-1 loiters with taubar in {lem['differing_taubar_values']}: there the cap "
-        f"at Gamma merges the next maximum delays Gamma and Gamma + 1, so |T| = Gamma - 1, "
-        f"not taubar = Gamma."
-        + (
+    theorem_table = markdown_table(
+        [
+            "check",
+            "max |difference|" if aggregate else "bound on max |difference|",
+            "tolerance",
+            "operator residual (bound / (1-λ))",
+        ],
+        [
+            [
+                "Theorem 4: RLP(full MDP) = UBLP",
+                t.theorem4_max_abs_diff,
+                t.tolerance_theorem4,
+                f"{_fmt(t.rlp_residual)} ({_fmt(t.rlp_distance_bound)})",
+            ],
+            [
+                "Theorem 3: NLP(full MDP) = LBLP",
+                t.theorem3_max_abs_diff,
+                t.tolerance_theorem3,
+                f"{_fmt(t.nlp_residual)} ({_fmt(t.nlp_distance_bound)})",
+            ],
+        ],
+    )
+    counted = ""
+    if lem.full_mdp_rows_equal_construction is not None:
+        counted = (
             f" Counted independently from the full MDP's aggregated rows: "
-            f"{'identical' if lem['full_mdp_rows_equal_construction'] else 'DIFFERENT'} "
-            f"({lem['full_mdp_rows_differ_pairs']} pairs differ)."
-            if "full_mdp_rows_equal_construction" in lem
-            else ""
+            f"{'identical' if lem.full_mdp_rows_equal_construction else 'DIFFERENT'} "
+            f"({lem.full_mdp_rows_differ_pairs} pairs differ)."
         )
-        + "\n"
+    return [
+        "## 2. UBLP and LBLP; Theorems 3 and 4; Lemma 3\n",
+        "*Paper:* RLP collapses to UBLP (Theorem 4; type-1 loiter successor taubar = 2) and "
+        "the disjunctive NLP to LBLP (Theorem 3; successor taubar = taubar + 1).\n",
+        lp_table,
+        "",
+        theorem_table,
+        f"\nMethod: {how}.\n",
+        f"Lemma 3: |T(i,u)| from the partition-level construction equals the paper's formula "
+        f"on {lem.pairs - lem.pairs_differing:,} of {lem.pairs:,} allowed "
+        f"(partition, action) pairs; it differs on {lem.pairs_differing} pairs, all of "
+        f"them type-1 loiters with taubar in {lem.differing_taubar_values}: there the cap "
+        f"at Gamma merges the next maximum delays Gamma and Gamma + 1, so |T| = Gamma - 1, "
+        f"not taubar = Gamma." + counted + "\n",
+    ]
+
+
+def _claims_table(cl: ClaimsSummary) -> str:
+    return markdown_table(
+        ["pairs x1 = x2 + e_j", "count", "violations (V*(x1) - V*(x2) > tol)", "max excess"],
+        [
+            ["all", cl.pairs, cl.violations, cl.max_excess],
+            [
+                "tau_j(x2) = 0 (a new alert at j)",
+                cl.pairs - cl.pairs_same_alert_status,
+                cl.violations_new_alert,
+                None,
+            ],
+            [
+                "... at the UAV's own station, d = 0",
+                None,
+                cl.violations_new_alert_own_station,
+                None,
+            ],
+            [
+                "tau_j(x2) >= 1 (same alert status)",
+                cl.pairs_same_alert_status,
+                cl.violations_same_alert_status,
+                cl.max_excess_same_alert_status,
+            ],
+            [
+                "partitions, same (l,w,d,A), taubar+1 vs taubar",
+                cl.partition_pairs,
+                cl.partition_violations,
+                cl.partition_max_excess,
+            ],
+        ],
     )
 
-    # 3
-    add("## 3. Claims 1 and 2 (monotonicity)\n")
-    add(
+
+def _claims_explanation(cl: ClaimsSummary) -> list[str]:
+    """Why Claim 2 fails where it does (only when it does), with the worst examples."""
+    if not cl.violations:
+        return []
+    lines = [
+        "**Why Claim 2 fails here.** The claim's proof (Appendix, Claim 1) applies the "
+        "control sequence that is optimal from x1 to x2. Under this model that is not "
+        "always possible: loitering at a station with d = 0 is allowed only if the "
+        "station has an alert (`allow_empty_loiter = false`, the project's "
+        "specification). A state with a new alert at station j (tau_j = 1 instead of 0) "
+        "therefore has *more* admissible controls — the UAV may loiter at j and collect "
+        "the information reward — so its value can be higher, although its delay "
+        "penalty is not lower; and a new alert at another station gives the same extra "
+        "option a few steps later. "
+        + (
+            "Every violation above has tau_j(x2) = 0; among pairs with the same alert "
+            "status (where the admissible controls along every trajectory agree) there "
+            "are none, so the claim — and the partition-level claim, whose pairs keep A "
+            "fixed — holds where its proof applies. "
+            if cl.violations_same_alert_status == 0
+            else f"**{cl.violations_same_alert_status} violations have the same alert "
+            "status: the explanation above does not cover them.** "
+        )
+        + "With `allow_empty_loiter = true` (the paper's literal text) the admissible "
+        "controls never depend on the delays.\n"
+    ]
+    ex = cl.examples[:5]
+    if ex:
+        lines.append(
+            markdown_table(
+                ["x2 (l, w, d, tau)", "station j", "V*(x2)", "V*(x1 = x2 + e_j)", "excess"],
+                [
+                    [
+                        f"({e['x2']['l']}, {e['x2']['w']}, {e['x2']['d']}, "
+                        f"{list(e['x2']['tau'].values())})",
+                        e["station"],
+                        e["vstar_x2"],
+                        e["vstar_x1"],
+                        e["excess"],
+                    ]
+                    for e in ex
+                ],
+            )
+        )
+        lines.append("")
+    return lines
+
+
+def _section_claims(s: Summary, files: dict[str, Path], out: Path) -> list[str]:
+    cl = s.claims
+    return [
+        "## 3. Claims 1 and 2 (monotonicity)\n",
         "*Paper (Claim 2):* if x1 >= x2 (same l, w, d; tau(x1) >= tau(x2)) then "
         "V*(x1) <= V*(x2); if S_i >= S_j then min over S_i of V* <= min over S_j of V*. "
-        "Figures 3 and 4 support it.\n"
-    )
-    add(
-        markdown_table(
-            ["pairs x1 = x2 + e_j", "count", "violations (V*(x1) - V*(x2) > tol)", "max excess"],
-            [
-                ["all", cl["pairs"], cl["violations"], cl["max_excess"]],
-                [
-                    "tau_j(x2) = 0 (a new alert at j)",
-                    cl["pairs"] - cl["pairs_same_alert_status"],
-                    cl["violations_new_alert"],
-                    None,
-                ],
-                [
-                    "... at the UAV's own station, d = 0",
-                    None,
-                    cl["violations_new_alert_own_station"],
-                    None,
-                ],
-                [
-                    "tau_j(x2) >= 1 (same alert status)",
-                    cl["pairs_same_alert_status"],
-                    cl["violations_same_alert_status"],
-                    cl["max_excess_same_alert_status"],
-                ],
-                [
-                    "partitions, same (l,w,d,A), taubar+1 vs taubar",
-                    cl["partition_pairs"],
-                    cl["partition_violations"],
-                    cl["partition_max_excess"],
-                ],
-            ],
-        )
-    )
-    add(f"\nTolerance: 2 x the error bound of V* = {_fmt(cl['tolerance'])}.\n")
-    if cl["violations"]:
-        add(
-            "**Why Claim 2 fails here.** The claim's proof (Appendix, Claim 1) applies the "
-            "control sequence that is optimal from x1 to x2. Under this model that is not "
-            "always possible: loitering at a station with d = 0 is allowed only if the "
-            "station has an alert (`allow_empty_loiter = false`, the project's "
-            "specification). A state with a new alert at station j (tau_j = 1 instead of 0) "
-            "therefore has *more* admissible controls — the UAV may loiter at j and collect "
-            "the information reward — so its value can be higher, although its delay "
-            "penalty is not lower; and a new alert at another station gives the same extra "
-            "option a few steps later. "
-            + (
-                "Every violation above has tau_j(x2) = 0; among pairs with the same alert "
-                "status (where the admissible controls along every trajectory agree) there "
-                "are none, so the claim — and the partition-level claim, whose pairs keep A "
-                "fixed — holds where its proof applies. "
-                if cl["violations_same_alert_status"] == 0
-                else f"**{cl['violations_same_alert_status']} violations have the same alert "
-                "status: the explanation above does not cover them.** "
-            )
-            + "With `allow_empty_loiter = true` (the paper's literal text) the admissible "
-            "controls never depend on the delays.\n"
-        )
-        ex = cl["examples"][:5]
-        if ex:
-            add(
-                markdown_table(
-                    ["x2 (l, w, d, tau)", "station j", "V*(x2)", "V*(x1 = x2 + e_j)", "excess"],
-                    [
-                        [
-                            f"({e['x2']['l']}, {e['x2']['w']}, {e['x2']['d']}, "
-                            f"{list(e['x2']['tau'].values())})",
-                            e["station"],
-                            e["vstar_x2"],
-                            e["vstar_x1"],
-                            e["excess"],
-                        ]
-                        for e in ex
-                    ],
-                )
-            )
-            add("")
-    ch = cl["figure4_chain"]
-    add(
+        "Figures 3 and 4 support it.\n",
+        _claims_table(cl),
+        f"\nTolerance: 2 x the error bound of V* = {_fmt(cl.tolerance)}.\n",
+        *_claims_explanation(cl),
         f"Figure 4's chain (A = first and last station, d = 0, w = +1, l = first station): "
-        f"min V* non-increasing in taubar: **{_fmt(ch['non_increasing'])}**.\n"
-    )
-    add(_img(files, "fig3", out, "Figure 3: V* along ordered states") + "\n")
-    add(
+        f"min V* non-increasing in taubar: **{_fmt(cl.figure4_chain['non_increasing'])}**.\n",
+        _img(files, "fig3", out, "Figure 3: V* along ordered states") + "\n",
         "*Paper, Figure 3:* monotonically decreasing value function along partially "
-        "ordered states with increasing maximum delay.\n"
-    )
-    add(_img(files, "fig4", out, "Figure 4: min V* per partition") + "\n")
-    add(
+        "ordered states with increasing maximum delay.\n",
+        _img(files, "fig4", out, "Figure 4: min V* per partition") + "\n",
         "*Paper, Figure 4:* monotonically decreasing least value per partition "
-        "(green line), A = 1001, d = 0, w = 1, l = 0.\n"
-    )
+        "(green line), A = 1001, d = 0, w = 1, l = 0.\n",
+    ]
 
-    # 4
-    add("## 4. The sandwich, the greedy policy and V_sub\n")
-    add(
+
+def _section_sandwich(s: Summary, files: dict[str, Path], out: Path) -> list[str]:
+    sw, po = s.sandwich, s.policy
+    tighter = "tighter" if sw.mean_vstar_minus_vlow < sw.mean_vup_minus_vstar else "looser"
+    return [
+        "## 4. The sandwich, the greedy policy and V_sub\n",
         "*Paper (Sec. 6):* w*(i) <= V*(x) <= v*(i); pi_s greedy w.r.t. V_low = Phi w*; "
         "V_low <= V_sub <= V* <= V_up; 'the lower bound appears to be tighter than the "
-        "upper bound'; V_sub is close to V*.\n"
-    )
-    ch4 = po["chain"]
-    add(
+        "upper bound'; V_sub is close to V*.\n",
         markdown_table(
             ["inequality", "margin min(rhs - lhs)", "tolerance", "violations", "worst state"],
             [
-                _inequality_row("w*(i) <= V*(x)", sw["lower"]),
-                _inequality_row("V*(x) <= v*(i)", sw["upper"]),
-                _inequality_row("V_low <= V_sub", ch4["vlow_le_vsub"]),
-                _inequality_row("V_sub <= V*", ch4["vsub_le_vstar"]),
+                _inequality_row("w*(i) <= V*(x)", sw.lower),
+                _inequality_row("V*(x) <= v*(i)", sw.upper),
+                _inequality_row("V_low <= V_sub", po.chain["vlow_le_vsub"]),
+                _inequality_row("V_sub <= V*", po.chain["vsub_le_vstar"]),
             ],
-        )
-    )
-    add(
-        f"\nMean V* - V_low = {_fmt(sw['mean_vstar_minus_vlow'])}, mean V_up - V* = "
-        f"{_fmt(sw['mean_vup_minus_vstar'])} (the lower bound is "
-        f"{'tighter' if sw['mean_vstar_minus_vlow'] < sw['mean_vup_minus_vstar'] else 'looser'}"
-        f" on average); largest partition gap v* - w* = {_fmt(sw['partition_gap_max'])}. "
+        ),
+        f"\nMean V* - V_low = {_fmt(sw.mean_vstar_minus_vlow)}, mean V_up - V* = "
+        f"{_fmt(sw.mean_vup_minus_vstar)} (the lower bound is {tighter} on average); "
+        f"largest partition gap v* - w* = {_fmt(sw.partition_gap_max)}. "
         f"With the LP solutions in place of the fixed points the margins are "
-        f"{_fmt(sw['lp_lower_margin'])} (lower) and {_fmt(sw['lp_upper_margin'])} (upper).\n"
-    )
-    add(
-        f"pi_s differs from pi* on {po['differs_states']:,} states "
-        f"({100 * po['differs_fraction']:.2f} %; this count includes actions tied under "
+        f"{_fmt(sw.lp_lower_margin)} (lower) and {_fmt(sw.lp_upper_margin)} (upper).\n",
+        f"pi_s differs from pi* on {po.differs_states:,} states "
+        f"({100 * po.differs_fraction:.2f} %; this count includes actions tied under "
         "V_low or V*, where the tie rule decides); its action loses more than "
-        f"{_fmt(po['suboptimal_tolerance'])} in one step on "
-        f"{100 * po['suboptimal_fraction']:.2f} % of states (largest one-step loss "
-        f"{_fmt(po['max_one_step_loss'])}). max(V* - V_sub) = "
-        f"{_fmt(po['max_vstar_minus_vsub'])} (at {_st(po['max_vstar_minus_vsub_state'])}), "
-        f"mean {_fmt(po['mean_vstar_minus_vsub'])}; "
-        f"V_sub by {po['vsub_method']} evaluation, residual {_fmt(po['vsub_residual'])}.\n"
-    )
-    add(_img(files, "fig5", out, "Figure 5: bounds vs V*") + "\n")
-    add(
+        f"{_fmt(po.suboptimal_tolerance)} in one step on "
+        f"{100 * po.suboptimal_fraction:.2f} % of states (largest one-step loss "
+        f"{_fmt(po.max_one_step_loss)}). max(V* - V_sub) = "
+        f"{_fmt(po.max_vstar_minus_vsub)} (at {_st(po.max_vstar_minus_vsub_state)}), "
+        f"mean {_fmt(po.mean_vstar_minus_vsub)}; "
+        f"V_sub by {po.vsub_method} evaluation, residual {_fmt(po.vsub_residual)}.\n",
+        _img(files, "fig5", out, "Figure 5: bounds vs V*") + "\n",
         "*Paper, Figure 5:* V_up, V_low and V* on the 30 partitions of eq. (32)-(33); "
-        "the lower bound appears tighter.\n"
-    )
-    add(_img(files, "fig6", out, "Figure 6: V_sub vs V*") + "\n")
-    add(
+        "the lower bound appears tighter.\n",
+        _img(files, "fig6", out, "Figure 6: V_sub vs V*") + "\n",
         "*Paper, Figure 6:* V_sub against V* on the clockwise states (32): "
-        "'the approximation is quite good'.\n"
-    )
+        "'the approximation is quite good'.\n",
+    ]
 
-    # 5
-    add("## 5. Monte Carlo (Table 1, Figure 7)\n")
-    add(
-        f"Seeds {mc['seeds']}, {mc['n_steps_per_seed']:,} steps each, the same alert "
-        f"sequence for both policies; statistics pooled over all serviced alerts.\n"
+
+def _section_monte_carlo(s: Summary, files: dict[str, Path], out: Path) -> list[str]:
+    mc = s.monte_carlo
+    ps, pp = mc.pi_star, mc.pi_s
+    conv = mc.conventions
+    conv_table = markdown_table(
+        ["delay convention", "π* mean / worst", "π_s mean / worst", "closeness to Table 1"],
+        [
+            [
+                r["convention"],
+                f"{r['values']['pi_star']['mean_delay']:.2f} / "
+                f"{r['values']['pi_star']['worst_delay']}",
+                f"{r['values']['pi_s']['mean_delay']:.2f} / {r['values']['pi_s']['worst_delay']}",
+                r["relative_error_sum"],
+            ]
+            for r in conv["table"]
+        ],
     )
-    add(monte_carlo_table(s) + "\n")
-    add(
+    return [
+        "## 5. Monte Carlo (Table 1, Figure 7)\n",
+        f"Seeds {mc.seeds}, {mc.n_steps_per_seed:,} steps each, the same alert "
+        f"sequence for both policies; statistics pooled over all serviced alerts.\n",
+        monte_carlo_table(s) + "\n",
         "**Conventions.** An alert arriving with the disturbance of step t shows as "
         "tau_j(t+1) = 1. Its *service delay* is the time from its arrival to the step on "
         "which the UAV starts loitering at that station (the model's tau_j then, but not "
         "capped at Gamma). *Loiters* are the consecutive loiters from that step (the dwell "
         "reached when the UAV leaves). An alert arriving at a station that already has a "
         "pending alert is merged by the model and is not a separate serviced alert (merged: "
-        f"{mc['pi_star']['n_merged']} for pi*, {mc['pi_s']['n_merged']} for pi_s); one "
+        f"{ps.n_merged} for pi*, {pp.n_merged} for pi_s); one "
         "arriving at the station where the UAV is loitering is cleared by that loiter "
-        f"(absorbed: {mc['pi_star']['n_absorbed']} / {mc['pi_s']['n_absorbed']}). Alerts "
-        "still pending at the end are not counted.\n"
-    )
-    conv = mc["conventions"]
-    add(
-        markdown_table(
-            ["delay convention", "π* mean / worst", "π_s mean / worst", "closeness to Table 1"],
-            [
-                [
-                    r["convention"],
-                    f"{r['values']['pi_star']['mean_delay']:.2f} / "
-                    f"{r['values']['pi_star']['worst_delay']}",
-                    f"{r['values']['pi_s']['mean_delay']:.2f} / "
-                    f"{r['values']['pi_s']['worst_delay']}",
-                    r["relative_error_sum"],
-                ]
-                for r in conv["table"]
-            ],
-        )
-    )
-    add(
+        f"(absorbed: {ps.n_absorbed} / {pp.n_absorbed}). Alerts "
+        "still pending at the end are not counted.\n",
+        conv_table,
         f"\nClosest to the paper's numbers (sum of relative errors of mean and worst delay): "
         f"**{conv['closest']}**. Mean delay over all arrivals (merged alerts with their own "
-        f"delay, absorbed ones 0): pi* {mc['pi_star']['mean_delay_all_arrivals']:.2f}, "
-        f"pi_s {mc['pi_s']['mean_delay_all_arrivals']:.2f}. Fraction of services with the "
-        f"full dwell D: pi* {mc['pi_star']['fraction_full_dwell']:.2f}, pi_s "
-        f"{mc['pi_s']['fraction_full_dwell']:.2f} (paper: 'almost 90 %'); delay <= 10: pi* "
-        f"{mc['pi_star']['fraction_delay_le_10']:.2f}, pi_s "
-        f"{mc['pi_s']['fraction_delay_le_10']:.2f} (paper: 'roughly 90 %').\n"
-    )
-    add(_img(files, "fig7", out, "Figure 7: delay and loiter histograms") + "\n")
-    add(
+        f"delay, absorbed ones 0): pi* {ps.mean_delay_all_arrivals:.2f}, "
+        f"pi_s {pp.mean_delay_all_arrivals:.2f}. Fraction of services with the "
+        f"full dwell D: pi* {ps.fraction_full_dwell:.2f}, pi_s "
+        f"{pp.fraction_full_dwell:.2f} (paper: 'almost 90 %'); delay <= 10: pi* "
+        f"{ps.fraction_delay_le_10:.2f}, pi_s "
+        f"{pp.fraction_delay_le_10:.2f} (paper: 'roughly 90 %').\n",
+        _img(files, "fig7", out, "Figure 7: delay and loiter histograms") + "\n",
         "*Paper, Figure 7:* histograms of service delay and dwell for pi* and pi_s; "
-        "'hardly any difference'.\n"
-    )
-    add(_img(files, "fig2", out, "Figure 2: information gain vs dwell") + "\n")
-    add(
+        "'hardly any difference'.\n",
+        _img(files, "fig2", out, "Figure 2: information gain vs dwell") + "\n",
         "*Paper, Figure 2:* value of information gained vs dwell time (Appendix A's "
-        "operator model, natural log).\n"
-    )
+        "operator model, natural log).\n",
+    ]
 
-    # times
-    add("## Times and memory\n")
-    secs = s.get("seconds", {})
-    rss = s.get("peak_rss_mb", {})
-    cpu = s.get("cpu_seconds", {})
-    add(
+
+def _section_times(s: Summary) -> list[str]:
+    return [
+        "## Times and memory\n",
         markdown_table(
             ["step", "wall seconds", "CPU seconds (all threads)", "peak RSS after (MB)"],
             [
                 [
                     k,
                     round(x, 3),
-                    round(cpu.get(k, float("nan")), 3),
-                    round(rss.get(k, float("nan"))),
+                    round(s.cpu_seconds.get(k, float("nan")), 3),
+                    round(s.peak_rss_mb.get(k, float("nan"))),
                 ]
-                for k, x in secs.items()
+                for k, x in s.seconds.items()
             ],
-        )
-    )
-    add("")
-    path.write_text("\n".join(L) + "\n")
-    return path
-
-
-def _inequality_row(label: str, check: dict[str, Any]) -> list[Any]:
-    """One row of the sandwich table: margin, tolerance, violations, worst state."""
-    return [
-        label,
-        check["margin"],
-        check["tolerance"],
-        check["violations"],
-        _st(check["worst_state"]),
+        ),
+        "",
     ]
+
+
+def _inequality_row(label: str, check: Inequality) -> list[Any]:
+    """One row of the sandwich table: margin, tolerance, violations, worst state."""
+    return [label, check.margin, check.tolerance, check.violations, _st(check.worst_state)]
 
 
 def _st(d: dict[str, Any]) -> str:

@@ -15,7 +15,12 @@ r"""The one-command reproduction of the paper's patrol results (Sections 4-6).
 5. the Monte Carlo of Section 6 (:mod:`lpbounds.patrol.simulation`) beside Table 1;
 6. Figures 2-7 (:mod:`lpbounds.patrol.figures`);
 7. ``report.md`` (:mod:`lpbounds.patrol.report`);
-8. ``summary.json`` and ``values.npz``.
+8. ``summary.json``, ``values.npz`` and ``manifest.json``.
+
+Each step is a function returning a typed dataclass (:mod:`lpbounds.patrol.summary`);
+:func:`reproduce` runs them in order inside an
+:class:`~lpbounds.outputs.AtomicDirectory`, so ``out`` is either the previous complete
+output or the new complete one, never a mixture.
 
 Tolerances
 ----------
@@ -33,6 +38,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+import signal
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -43,16 +49,34 @@ from typing import Any
 import numpy as np
 
 from ..dp import evaluate_policy, exact_rows, greedy_policy, solve_exact, solve_game
-from ..errors import ValidationError
+from ..errors import ConsistencyError, ValidationError
 from ..formulations.base import resolve_solver
 from ..instances import load_instance
+from ..outputs import MANIFEST, AtomicDirectory
 from ..rows import BellmanRows
 from . import figures as figs
 from .bounds import LBLP, UBLP, lemma3_cardinality, patrol_rows
 from .instance import params_from_instance
 from .model import PatrolModel
 from .params import PatrolParams
+from .report import write_report
 from .simulation import alert_sequence, pooled_statistics, simulate
+from .summary import (
+    ClaimsSummary,
+    Counts,
+    Inequality,
+    Lemma3Summary,
+    LPSummary,
+    MonteCarloSummary,
+    PolicyStatistics,
+    PolicySummary,
+    SandwichSummary,
+    Summary,
+    TheoremsSummary,
+    VStarSummary,
+    jsonable,
+    to_dict,
+)
 
 __all__ = [
     "DEFAULT_MODEL",
@@ -61,9 +85,20 @@ __all__ = [
     "PAPER_TABLE1",
     "Reproduction",
     "Tracker",
+    "build_model",
+    "check_claims",
+    "check_general",
+    "check_lemma3",
+    "check_sandwich",
+    "checkpoint",
     "claim_pairs",
+    "draw_figures",
     "general_bound_residuals",
     "reproduce",
+    "run_monte_carlo",
+    "solve_bounds",
+    "solve_vstar",
+    "write_outputs",
 ]
 
 DEFAULT_MODEL = "models/patrol-paper.toml"
@@ -74,13 +109,15 @@ PAPER_TABLE1 = {
     "pi_star": {"mean_loiters": 4.7, "mean_delay": 5.6, "worst_delay": 15},
     "pi_s": {"mean_loiters": 4.7, "mean_delay": 5.6, "worst_delay": 18},
 }
-#: Options per cvxpy solver for UBLP/LBLP. HiGHS's interior point method with crossover
-#: (a vertex solution, as simplex gives), on one thread, is 5-7x faster than its default
-#: (dual simplex, parallel) on these MDP LPs: UBLP of the paper's instance took 2.3 s
-#: against 17 s (5.6 s for IPM on the default threads) on a shared, loaded 2-core machine.
-SOLVER_OPTIONS: dict[str, dict[str, Any]] = {
-    "HIGHS": {"highs_options": {"solver": "ipm", "threads": 1}}
-}
+#: Options per cvxpy solver for UBLP/LBLP: HiGHS's interior point method with crossover
+#: (a vertex solution, as simplex gives). No ``threads`` option: HiGHS (1.16) refuses a
+#: thread count that differs from the one its scheduler started with in the process, so
+#: ``threads: 1`` made every reproduction after any other HiGHS solve fail. It bought
+#: nothing: measured side by side (one fresh process per configuration, highspy 1.16,
+#: 2 cores, load ~6 from other jobs, so CPU seconds), UBLP / LBLP of patrol-paper took
+#: 3.05 / 2.46 s CPU with ipm + threads 1, 2.97 / 2.46 s with ipm on the default threads,
+#: 4.99 / 4.15 s with HiGHS's default (simplex); patrol-small 0.01 s in every case.
+SOLVER_OPTIONS: dict[str, dict[str, Any]] = {"HIGHS": {"highs_options": {"solver": "ipm"}}}
 #: Paper, Section 5: the example's counts.
 PAPER_COUNTS = {"n_states": 2_048_000, "n_partitions": 8_900}
 
@@ -101,6 +138,7 @@ class Tracker:
 
     @contextmanager
     def step(self, name: str, description: str, total: float | None = None) -> Iterator[Any]:
+        checkpoint(name)
         t0 = time.perf_counter()
         c0 = _cpu_seconds()
         task = None
@@ -126,6 +164,19 @@ class Tracker:
                 self.progress.update(task, total=done, completed=done, status=f"{dt:.2f} s")
 
 
+#: Environment variable naming a step (``build``, ``vstar``, ... ``write``, ``commit``) at
+#: whose start the process sends itself SIGINT: how the tests interrupt a run at a
+#: chosen point, as Ctrl-C would.
+INTERRUPT_AT_ENV = "LPBOUNDS_INTERRUPT_AT"
+
+
+def checkpoint(name: str) -> None:
+    """Send SIGINT to this process if :data:`INTERRUPT_AT_ENV` names ``name`` (tests)."""
+    if os.environ.get(INTERRUPT_AT_ENV) == name:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1.0)  # the handler runs at the next bytecode; never continue past
+
+
 def _cpu_seconds() -> float:
     """CPU time (user + system) of the process, all threads: the work done, which a
     loaded machine does not inflate the way it inflates wall time."""
@@ -145,11 +196,13 @@ def _peak_rss_mb() -> float:
 
 @dataclass
 class Reproduction:
-    """What :func:`reproduce` returns: the summary (as written to ``summary.json``), the
-    output files, and the large arrays (as written to ``values.npz``)."""
+    """What :func:`reproduce` returns: the summary as a dictionary (as written to
+    ``summary.json``) and as typed objects (``result``), the output files, and the large
+    arrays (as written to ``values.npz``)."""
 
     summary: dict[str, Any]
     out: Path
+    result: Summary
     files: dict[str, Path] = field(default_factory=dict)
     arrays: dict[str, np.ndarray] = field(default_factory=dict)
 
@@ -240,16 +293,18 @@ def _reward_spread(mdp: Any, labels: np.ndarray, n_partitions: int) -> float:
     return float((hi[has] - lo[has]).max(initial=0.0))
 
 
-def _err_le(a: np.ndarray, b: np.ndarray, tol: float) -> dict[str, Any]:
-    """Margin of ``a <= b``: ``min(b - a)``, violations beyond ``tol``, where."""
+def _err_le(
+    a: np.ndarray, b: np.ndarray, tol: float, comps: np.ndarray, stations: Sequence[int]
+) -> Inequality:
+    """Margin of ``a <= b``: ``min(b - a)``, violations beyond ``tol``, the worst state."""
     diff = b - a
     bad = np.flatnonzero(diff < -tol)
-    return {
-        "margin": float(diff.min()),
-        "tolerance": float(tol),
-        "violations": int(bad.size),
-        "worst_index": int(np.argmin(diff)),
-    }
+    return Inequality(
+        margin=float(diff.min()),
+        tolerance=float(tol),
+        violations=int(bad.size),
+        worst_state=_state_dict(comps, int(np.argmin(diff)), stations),
+    )
 
 
 def _state_dict(comps: np.ndarray, x: int, stations: Sequence[int]) -> dict[str, Any]:
@@ -263,21 +318,7 @@ def _state_dict(comps: np.ndarray, x: int, stations: Sequence[int]) -> dict[str,
     }
 
 
-def _jsonable(obj: Any) -> Any:
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, float) and not np.isfinite(obj):
-        return None if np.isnan(obj) else ("inf" if obj > 0 else "-inf")
-    return obj
-
-
 def _machine() -> dict[str, Any]:
-    import os
-
     return {
         "python": platform.python_version(),
         "platform": platform.platform(),
@@ -295,7 +336,518 @@ def _load(model: Any) -> tuple[str, PatrolParams]:
     return inst.name, params_from_instance(inst)
 
 
+# ---------------------------------------------------------------------- step results
+@dataclass
+class BuiltModel:
+    """Step 1's model: the MDP, the partition and the components of states/partitions."""
+
+    pm: PatrolModel
+    mdp: Any
+    part: Any
+    labels: np.ndarray
+    comps: np.ndarray
+    pcomps: np.ndarray
+
+
+@dataclass
+class VStar:
+    """Step 1's exact solution."""
+
+    summary: VStarSummary
+    values: np.ndarray
+    policy: np.ndarray
+    error_bound: float
+
+
+@dataclass
+class Bounds:
+    """Step 2's UBLP and LBLP: the LP solves' summaries and the certified fixed points."""
+
+    summaries: dict[str, LPSummary]
+    v_up: np.ndarray
+    w_low: np.ndarray
+    err_up: float
+    err_low: float
+    lp_values: dict[str, np.ndarray]
+
+
+@dataclass
+class General:
+    """Step 2's Theorems 3-4 and, with ``general="aggregate"``, ``|T(i, u)|`` counted."""
+
+    summary: TheoremsSummary
+    counted: np.ndarray | None
+
+
+@dataclass
+class SandwichAndPolicy:
+    """Step 4's sandwich, the greedy policy ``pi_s`` and its value ``V_sub``."""
+
+    sandwich: SandwichSummary
+    policy: PolicySummary
+    pi_s: np.ndarray
+    vsub: np.ndarray
+
+
+@dataclass
+class MonteCarlo:
+    """Step 5's simulations and their pooled statistics."""
+
+    summary: MonteCarloSummary
+    runs: dict[str, list[Any]]
+
+
+# ---------------------------------------------------------------------- the steps
+def build_model(params: PatrolParams, tr: Tracker) -> tuple[BuiltModel, Counts]:
+    """Step 1a: the MDP, the partition, and ``|S|``, ``M`` against eq. (27)-(28)."""
+    with tr.step("build", "building the MDP and the partition") as adv:
+        pm = PatrolModel(params)
+        mdp = pm.mdp()
+        part = pm.partition()
+        built = BuiltModel(
+            pm=pm,
+            mdp=mdp,
+            part=part,
+            labels=np.asarray(part.labels, dtype=np.int64),
+            comps=pm.state_components(),
+            pcomps=pm.partition_components(),
+        )
+        adv(status=f"|S| = {mdp.n_states:,}  M = {part.n_partitions:,}")
+    counts = Counts(
+        n_states_eq27=int(params.n_states),
+        n_partitions_eq28=int(params.n_partitions),
+        n_states_counted=int(mdp.n_states),
+        n_partitions_counted=int(part.n_partitions),
+        n_state_action_pairs=int(mdp.allowed.sum()),
+        paper=dict(PAPER_COUNTS),
+    )
+    return built, counts
+
+
+def solve_vstar(built: BuiltModel, tr: Tracker) -> VStar:
+    """Step 1b: the exact ``V*`` and ``pi*`` by modified policy iteration."""
+    mdp = built.mdp
+    with tr.step("vstar", "exact V* (modified policy iteration)") as adv:
+        res = solve_exact(
+            mdp, "mpi", callback=lambda it, r: adv(status=f"iteration {it}  residual {r:.1e}")
+        )
+    vstar, pi_star = res.values, np.asarray(res.policy, dtype=np.int64)
+    summary = VStarSummary(
+        method=res.method,
+        iterations=res.iterations,
+        sweeps=res.sweeps,
+        residual=res.residual,
+        error_bound=res.error_bound,
+        tol=res.tol,
+        seconds=res.seconds,
+        min=float(vstar.min()),
+        max=float(vstar.max()),
+        mean=float(vstar.mean()),
+        policy_counts=_action_counts(mdp, pi_star),
+    )
+    return VStar(summary=summary, values=vstar, policy=pi_star, error_bound=res.error_bound)
+
+
+def solve_bounds(params: PatrolParams, solver: str, tr: Tracker) -> Bounds:
+    """Step 2a: UBLP and LBLP with the LP solver, and their fixed points (certified)."""
+    summaries: dict[str, LPSummary] = {}
+    fp: dict[str, Any] = {}
+    lp_vals: dict[str, np.ndarray] = {}
+    solver_options = dict(SOLVER_OPTIONS.get(solver, {}))
+    with tr.step("bounds", f"UBLP and LBLP ({solver}) and their fixed points", 4) as adv:
+        for key, cls, kind in (("ublp", UBLP, "upper"), ("lblp", LBLP, "lower")):
+            lp = cls(params)
+            lp_res = lp.solve(solver=solver, **solver_options)
+            adv(status=f"{cls.name}: {lp_res.status}")
+            # policy iteration: exact LU evaluations (8 on the paper), few kernel launches
+            f = solve_exact(patrol_rows(params, kind), "pi")
+            fp[key] = f
+            adv(status=f"{cls.name} fixed point")
+            lp_vals[key] = np.asarray(lp_res.values, dtype=np.float64)
+            summaries[key] = LPSummary(
+                solver=lp_res.solver,
+                solver_options=solver_options,
+                status=str(lp_res.status),
+                n_rows=int(lp.rows.n_rows),
+                objective=float(lp_res.objective),
+                primal_residual=float(lp_res.primal_residual),
+                residual_tol=float(lp_res.residual_tol),
+                dual_residual=_f(lp_res.dual_residual),
+                gap=_f(lp_res.gap),
+                solve_seconds=_f(lp_res.solve_seconds),
+                compile_seconds=_f(lp_res.compile_seconds),
+                fixed_point_seconds=f.seconds,
+                fixed_point_residual=f.residual,
+                fixed_point_error_bound=f.error_bound,
+                lp_minus_fixed_point_max_abs=float(np.abs(lp_vals[key] - f.values).max()),
+                lp_values_min=float(np.min(lp_res.values)),
+                lp_values_max=float(np.max(lp_res.values)),
+            )
+    return Bounds(
+        summaries=summaries,
+        v_up=fp["ublp"].values,
+        w_low=fp["lblp"].values,
+        err_up=fp["ublp"].error_bound,
+        err_low=fp["lblp"].error_bound,
+        lp_values=lp_vals,
+    )
+
+
+def check_general(built: BuiltModel, bounds: Bounds, general: str, tr: Tracker) -> General:
+    """Step 2b: Theorems 3-4, the general RLP / NLP of the full MDP against UBLP / LBLP."""
+    mdp, part, labels = built.mdp, built.part, built.labels
+    v_up, w_low = bounds.v_up, bounds.w_low
+    with tr.step("general", "general RLP and NLP of the full MDP (Theorems 3, 4)", 3) as adv:
+        gres = general_bound_residuals(mdp, labels, part.n_partitions, v_up, w_low)
+        adv(status="residuals")
+        # r_u(i): the reward is the same for every state of a partition (Section 4.2);
+        # then the max- and min-reduced aggregated rows (RLP, NLP) are the same rows
+        spread = _reward_spread(mdp, labels, part.n_partitions)
+        if general != "aggregate":
+            adv(2)
+            thm = TheoremsSummary(
+                method=general,
+                **gres,
+                reward_spread_within_partitions=spread,
+                theorem4_max_abs_diff=gres["rlp_distance_bound"],
+                theorem3_max_abs_diff=gres["nlp_distance_bound"],
+                tolerance_theorem4=bounds.err_up,
+                tolerance_theorem3=bounds.err_low,
+            )
+            return General(summary=thm, counted=None)
+        rlp_rows = BellmanRows.aggregate(mdp, part, reduce="max")
+        rlp = solve_exact(rlp_rows, "pi")
+        adv(status="RLP")
+        nlp_rows = rlp_rows if spread == 0.0 else BellmanRows.aggregate(mdp, part, reduce="min")
+        nlp = solve_game(nlp_rows)
+        adv(status="NLP")
+        thm = TheoremsSummary(
+            method=general,
+            **gres,
+            reward_spread_within_partitions=spread,
+            theorem4_max_abs_diff=float(np.abs(rlp.values - v_up).max()),
+            theorem3_max_abs_diff=float(np.abs(nlp.values - w_low).max()),
+            tolerance_theorem4=rlp.error_bound + bounds.err_up,
+            tolerance_theorem3=nlp.error_bound + bounds.err_low,
+            nlp_rows_shared_with_rlp=nlp_rows is rlp_rows,
+            rlp_rows=int(rlp_rows.n_rows),
+            nlp_rows=int(nlp_rows.n_rows),
+            rlp_error_bound=rlp.error_bound,
+            nlp_error_bound=nlp.error_bound,
+        )
+        # |T(i, u)| counted from the full MDP: distinct aggregated rows per (i, u)
+        counted = np.zeros((part.n_partitions, 3), dtype=np.int64)
+        np.add.at(counted, (rlp_rows.owner.astype(np.int64), rlp_rows.action), 1)
+    return General(summary=thm, counted=counted)
+
+
+def check_lemma3(
+    params: PatrolParams, built: BuiltModel, general: General, n_examples: int, tr: Tracker
+) -> Lemma3Summary:
+    """Step 2c: Lemma 3's ``|T(i, u)|`` from the construction against the paper's formula."""
+    with tr.step("lemma3", "Lemma 3: |T(i, u)|") as adv:
+        card = lemma3_cardinality(params)
+        rows_d, acts_d = np.nonzero(card.differs)
+        examples = [
+            {
+                "partition": int(i),
+                "action": built.mdp.action_names[int(a)],
+                "taubar": int(card.taubar[i]),
+                "construction": int(card.construction[i, a]),
+                "paper": int(card.paper[i, a]),
+            }
+            for i, a in zip(rows_d[:n_examples], acts_d[:n_examples], strict=True)
+        ]
+        lem = Lemma3Summary(**card.summary(), examples=examples)
+        if general.counted is not None:
+            lem.full_mdp_rows_equal_construction = bool(
+                np.array_equal(general.counted, card.construction)
+            )
+            lem.full_mdp_rows_differ_pairs = int((general.counted != card.construction).sum())
+        adv(status=f"{lem.pairs_differing} pairs differ")
+    return lem
+
+
+def check_claims(
+    params: PatrolParams, built: BuiltModel, vs: VStar, n_examples: int, tr: Tracker
+) -> ClaimsSummary:
+    """Step 3: Claims 1-2 on every ordered pair of states, then of partitions."""
+    with tr.step("claims", "Claims 1-2: monotonicity on all ordered pairs", 2) as adv:
+        state_level = _state_claims(params, built, vs, n_examples)
+        adv(status=f"{state_level['violations']} of {state_level['pairs']:,} pairs violate")
+        claims = ClaimsSummary(**state_level, **_partition_claims(params, built, vs, n_examples))
+        adv(status=f"partitions: {claims.partition_violations} violate")
+    return claims
+
+
+def _state_claims(
+    params: PatrolParams, built: BuiltModel, vs: VStar, n_examples: int
+) -> dict[str, Any]:
+    """Claim 2 on every ``x1 = x2 + e_j``, split by whether ``x2`` has the alert at ``j``."""
+    comps, vstar = built.comps, vs.values
+    tol_claim = 2.0 * vs.error_bound
+    st_arr = np.asarray(params.stations)
+    acc = dict.fromkeys(
+        ("pairs", "violations", "new_alert", "new_alert_own", "same", "same_pairs"), 0
+    )
+    max_excess, max_same = -np.inf, -np.inf
+    cand: list[tuple[float, int, int, int]] = []
+    for j, x1, x2 in claim_pairs(built.pm, comps):
+        excess = vstar[x1] - vstar[x2]  # Claim 2 says <= 0
+        bad = excess > tol_claim
+        new_alert = comps[x2, 3 + j] == 0
+        at_own = (comps[x2, 0] == st_arr[j]) & (comps[x2, 2] == 0)
+        acc["pairs"] += x1.size
+        acc["violations"] += int(bad.sum())
+        acc["new_alert"] += int((bad & new_alert).sum())
+        acc["new_alert_own"] += int((bad & new_alert & at_own).sum())
+        acc["same"] += int((bad & ~new_alert).sum())
+        acc["same_pairs"] += int((~new_alert).sum())
+        if x1.size:
+            max_excess = max(max_excess, float(excess.max()))
+        if (~new_alert).any():
+            max_same = max(max_same, float(excess[~new_alert].max()))
+        top = np.flatnonzero(bad)
+        top = top[np.argsort(-excess[top])[:n_examples]]
+        for k in top:
+            cand.append((float(excess[k]), int(x1[k]), int(x2[k]), j))
+        del x1, x2, excess, bad, new_alert, at_own
+    cand.sort(reverse=True)
+    return {
+        "pairs": acc["pairs"],
+        "tolerance": tol_claim,
+        "violations": acc["violations"],
+        "max_excess": max_excess,
+        "violations_new_alert": acc["new_alert"],
+        "violations_new_alert_own_station": acc["new_alert_own"],
+        "violations_same_alert_status": acc["same"],
+        "pairs_same_alert_status": acc["same_pairs"],
+        "max_excess_same_alert_status": max_same if np.isfinite(max_same) else None,
+        "examples": [
+            {
+                "x1": _state_dict(comps, a1, params.stations),
+                "x2": _state_dict(comps, a2, params.stations),
+                "station": int(params.stations[j]),
+                "vstar_x1": float(vstar[a1]),
+                "vstar_x2": float(vstar[a2]),
+                "excess": ex,
+            }
+            for ex, a1, a2, j in cand[:n_examples]
+        ],
+    }
+
+
+def _partition_claims(
+    params: PatrolParams, built: BuiltModel, vs: VStar, n_examples: int
+) -> dict[str, Any]:
+    """The partition-level Claim 2 (min of ``V*`` one delay apart) and Figure 4's chain."""
+    pcomps, tol_claim = built.pcomps, 2.0 * vs.error_bound
+    vmin_part = built.part.aggregate(vs.values, "min")
+    hi, lo = _partition_pairs(built.pm, pcomps)
+    pexcess = vmin_part[hi] - vmin_part[lo]
+    pbad = pexcess > tol_claim
+    pw = np.flatnonzero(pbad)
+    pw = pw[np.argsort(-pexcess[pw])][:n_examples]
+    # the chain of Figure 4
+    idx4, _, _ = figs.select_min_value_partitions(built.comps, params.stations)
+    chain = np.unique(built.labels[idx4])
+    chain = chain[np.argsort(pcomps[chain, -1])]
+    steps = np.diff(vmin_part[chain])
+    return {
+        "partition_pairs": int(hi.size),
+        "partition_violations": int(pbad.sum()),
+        "partition_max_excess": float(pexcess.max()) if hi.size else None,
+        "partition_examples": [
+            {
+                "higher": pcomps[hi[k]].tolist(),
+                "lower": pcomps[lo[k]].tolist(),
+                "excess": float(pexcess[k]),
+            }
+            for k in pw
+        ],
+        "figure4_chain": {
+            "taubar": pcomps[chain, -1].tolist(),
+            "min_vstar": vmin_part[chain].tolist(),
+            "non_increasing": bool((steps <= tol_claim).all()),
+        },
+    }
+
+
+def check_sandwich(
+    params: PatrolParams, built: BuiltModel, vs: VStar, bounds: Bounds, tr: Tracker
+) -> SandwichAndPolicy:
+    """Step 4: the sandwich ``w*(i) <= V*(x) <= v*(i)``, ``pi_s`` and ``V_sub``."""
+    mdp, part, labels, comps = built.mdp, built.part, built.labels, built.comps
+    vstar, err_v = vs.values, vs.error_bound
+    st = params.stations
+    with tr.step("sandwich", "sandwich, greedy policy pi_s and V_sub", 3) as adv:
+        v_low_s = bounds.w_low[labels]
+        v_up_s = bounds.v_up[labels]
+        lower = _err_le(v_low_s, vstar, bounds.err_low + err_v, comps, st)
+        upper = _err_le(vstar, v_up_s, bounds.err_up + err_v, comps, st)
+        gap = bounds.v_up - bounds.w_low
+        sandwich = SandwichSummary(
+            lower_margin=lower.margin,
+            upper_margin=upper.margin,
+            lower=lower,
+            upper=upper,
+            partition_gap_max=float(gap.max()),
+            partition_gap_mean=float(gap.mean()),
+            mean_vstar_minus_vlow=float((vstar - v_low_s).mean()),
+            mean_vup_minus_vstar=float((v_up_s - vstar).mean()),
+            # the same margins with the LP solutions in place of the fixed points
+            lp_lower_margin=float((part.aggregate(vstar, "min") - bounds.lp_values["lblp"]).min()),
+            lp_upper_margin=float((bounds.lp_values["ublp"] - part.aggregate(vstar, "max")).min()),
+        )
+        adv(status="sandwich")
+        pi_s = np.asarray(greedy_policy(mdp, v_low_s), dtype=np.int64)
+        adv(status="greedy policy")
+        ev = evaluate_policy(mdp, pi_s, method="iterative")
+        adv(status="V_sub")
+        chain = {
+            "vlow_le_vsub": _err_le(v_low_s, ev.values, ev.error_bound + bounds.err_low, comps, st),
+            "vsub_le_vstar": _err_le(ev.values, vstar, ev.error_bound + err_v, comps, st),
+            "vstar_le_vup": _err_le(vstar, v_up_s, bounds.err_up + err_v, comps, st),
+        }
+        policy = _policy_summary(params, built, vs, pi_s, ev, chain)
+    return SandwichAndPolicy(sandwich=sandwich, policy=policy, pi_s=pi_s, vsub=ev.values)
+
+
+def _policy_summary(
+    params: PatrolParams,
+    built: BuiltModel,
+    vs: VStar,
+    pi_s: np.ndarray,
+    ev: Any,
+    chain: dict[str, Inequality],
+) -> PolicySummary:
+    """How ``pi_s`` compares with ``pi*``: states that differ, one-step loss, ``V* - V_sub``."""
+    mdp, vstar, err_v = built.mdp, vs.values, vs.error_bound
+    rows_ex = exact_rows(mdp)
+    if rows_ex.pair_row is None:
+        raise ConsistencyError("the exact rows of the patrol MDP have no (state, action) index")
+    q = rows_ex.q_values(vstar)
+    loss = vstar - q[rows_ex.pair_row[np.arange(mdp.n_states), pi_s]]
+    differs = pi_s != vs.policy
+    vsub = ev.values
+    return PolicySummary(
+        differs_fraction=float(differs.mean()),
+        differs_states=int(differs.sum()),
+        suboptimal_fraction=float((loss > 2 * err_v).mean()),
+        suboptimal_tolerance=2 * err_v,
+        max_one_step_loss=float(loss.max()),
+        max_vstar_minus_vsub=float((vstar - vsub).max()),
+        max_vstar_minus_vsub_state=_state_dict(
+            built.comps, int(np.argmax(vstar - vsub)), params.stations
+        ),
+        mean_vstar_minus_vsub=float((vstar - vsub).mean()),
+        vsub_residual=ev.residual,
+        vsub_error_bound=ev.error_bound,
+        vsub_sweeps=ev.sweeps,
+        vsub_method=ev.method,
+        chain=chain,
+        pi_s_counts=_action_counts(mdp, pi_s),
+    )
+
+
+def run_monte_carlo(
+    params: PatrolParams,
+    built: BuiltModel,
+    policies: dict[str, np.ndarray],
+    seeds: list[int],
+    n_steps: int,
+    tr: Tracker,
+) -> MonteCarlo:
+    """Step 5: Section 6's simulation of ``pi*`` and ``pi_s`` on common alert sequences."""
+    runs: dict[str, list[Any]] = {key: [] for key in policies}
+    with tr.step(
+        "monte_carlo", f"Monte Carlo: {len(seeds)} seeds x {n_steps:,} steps", 2 * len(seeds)
+    ) as adv:
+        p0 = float(params.alert_probabilities()[0])
+        for s in seeds:
+            y = alert_sequence(n_steps, p0, params.m, s)
+            for key, pol in policies.items():
+                r = simulate(built.pm, pol, y, policy_name=key, seed=s, components=built.comps)
+                if r.mismatches:
+                    raise ConsistencyError(
+                        f"simulation of {key} (seed {s}): the model's successor disagrees "
+                        f"with the spec's dynamics on {r.mismatches} steps "
+                        f"(first at step {r.first_mismatch})"
+                    )
+                runs[key].append(r)
+                adv(status=f"seed {s}, {key}")
+    pooled = {k: pooled_statistics(v) for k, v in runs.items()}
+    summary = MonteCarloSummary(
+        pi_star=PolicyStatistics(**pooled["pi_star"]),
+        pi_s=PolicyStatistics(**pooled["pi_s"]),
+        seeds=seeds,
+        n_steps_per_seed=n_steps,
+        conventions=_conventions(pooled),
+    )
+    return MonteCarlo(summary=summary, runs=runs)
+
+
+def draw_figures(
+    params: PatrolParams,
+    built: BuiltModel,
+    vs: VStar,
+    bounds: Bounds,
+    sp: SandwichAndPolicy,
+    mc: MonteCarlo,
+    folder: Path,
+    tr: Tracker,
+) -> dict[str, Path]:
+    """Step 6: Figures 2-7 as PNG files in ``folder``."""
+    comps, pcomps, labels, vstar = built.comps, built.pcomps, built.labels, vs.values
+    files: dict[str, Path] = {}
+    with tr.step("figures", "figures 2-7", 6) as adv:
+        files["fig2"] = figs.plot_information(params, folder / "fig2_information.png")
+        adv()
+        files["fig3"] = figs.plot_ordered_states(
+            comps, params.stations, vstar, folder / "fig3_ordered_states.png"
+        )
+        adv()
+        files["fig4"] = figs.plot_min_value_partitions(
+            comps, params.stations, vstar, folder / "fig4_min_value_partitions.png"
+        )
+        adv()
+        files["fig5"] = figs.plot_bounds(
+            pcomps, labels, vstar, bounds.v_up, bounds.w_low, params.N, folder / "fig5_bounds.png"
+        )
+        adv()
+        files["fig6"] = figs.plot_vsub(
+            pcomps, labels, vstar, sp.vsub, params.N, folder / "fig6_vsub.png"
+        )
+        adv()
+        files["fig7"] = figs.plot_histograms(
+            {k: np.concatenate([r.delay for r in v]) for k, v in mc.runs.items()},
+            {k: np.concatenate([r.loiters[r.complete] for r in v]) for k, v in mc.runs.items()},
+            folder / "fig7_histograms.png",
+        )
+        adv()
+    return files
+
+
 # ---------------------------------------------------------------------- the pipeline
+def _check_arguments(
+    general: str, seeds: Sequence[int], n_steps: int, n_examples: int
+) -> list[int]:
+    """The scalar arguments of :func:`reproduce`, checked before anything is built."""
+    if general not in ("aggregate", "residual"):
+        raise ValidationError(f"general must be 'aggregate' or 'residual'; got {general!r}")
+    out = []
+    for k, s in enumerate(seeds):
+        if isinstance(s, bool) or not isinstance(s, int | np.integer) or s < 0:
+            raise ValidationError(f"seeds[{k}] must be an integer >= 0; got {s!r}")
+        out.append(int(s))
+    if not out:
+        raise ValidationError("give at least one Monte Carlo seed")
+    for name, value in (("n_steps", n_steps), ("n_examples", n_examples)):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+            raise ValidationError(f"{name} must be an integer >= 1; got {value!r}")
+    return out
+
+
 def reproduce(
     model: Any = DEFAULT_MODEL,
     out: str | Path = DEFAULT_OUT,
@@ -310,14 +862,21 @@ def reproduce(
 ) -> Reproduction:
     """Reproduce the paper's patrol results on one instance; write them into ``out``.
 
+    Every argument and the model are checked, and ``out`` is checked for writability and
+    locked, before any computation. The files are written into a temporary folder beside
+    ``out`` and moved into place, with ``manifest.json``, only when all are complete
+    (:class:`lpbounds.outputs.AtomicDirectory`): an error or Ctrl-C leaves a previous
+    ``out`` as it was.
+
     Parameters
     ----------
     model : path, name or PatrolParams
         A ``kind = "patrol"`` instance (default ``models/patrol-paper.toml``).
     out : path
-        Output folder (created): ``summary.json``, ``values.npz``, ``report.md``, PNGs.
+        Output folder: ``summary.json``, ``values.npz``, ``report.md``, PNGs,
+        ``manifest.json``. An existing folder is replaced as a whole.
     seeds : sequence of int
-        Seeds of the Monte Carlo alert sequences (one run of each policy per seed).
+        Seeds (``>= 0``) of the Monte Carlo alert sequences (one run of each policy per seed).
     n_steps : int
         Steps (time units) per Monte Carlo run (paper: 60,000).
     solver : str
@@ -340,405 +899,121 @@ def reproduce(
     Returns
     -------
     Reproduction
+
+    Raises
+    ------
+    ValidationError
+        A bad argument or model (nothing is created).
+    OutputError
+        ``out`` is not a writable folder, or another run holds its lock.
+    SolverError, ConvergenceError, ConsistencyError
+        A computation failed (``out`` is left as it was).
     """
-    if general not in ("aggregate", "residual"):
-        raise ValidationError(f"general must be 'aggregate' or 'residual'; got {general!r}")
-    seeds = [int(s) for s in seeds]
-    if not seeds:
-        raise ValidationError("give at least one Monte Carlo seed")
-    if n_steps < 1:
-        raise ValidationError(f"n_steps must be >= 1; got {n_steps}")
+    seeds = _check_arguments(general, seeds, n_steps, n_examples)
     solver = resolve_solver(solver)
-    t_start = time.perf_counter()
-    outdir = Path(out)
-    outdir.mkdir(parents=True, exist_ok=True)
-    tr = Tracker(progress)
     name, params = _load(model)
-    summary: dict[str, Any] = {
-        "instance": name,
-        "params": params.to_table(),
-        "machine": _machine(),
-        "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
-    }
-    files: dict[str, Path] = {}
-
-    # ------------------------------------------------------------- 1. model and V*
-    with tr.step("build", "building the MDP and the partition") as adv:
-        pm = PatrolModel(params)
-        mdp = pm.mdp()
-        part = pm.partition()
-        labels = np.asarray(part.labels, dtype=np.int64)
-        comps = pm.state_components()
-        pcomps = pm.partition_components()
-        adv(status=f"|S| = {mdp.n_states:,}  M = {part.n_partitions:,}")
-    summary["n_states"] = int(mdp.n_states)
-    summary["n_partitions"] = int(part.n_partitions)
-    summary["counts"] = {
-        "n_states_eq27": int(params.n_states),
-        "n_partitions_eq28": int(params.n_partitions),
-        "n_states_counted": int(mdp.n_states),
-        "n_partitions_counted": int(part.n_partitions),
-        "n_state_action_pairs": int(mdp.allowed.sum()),
-        "paper": PAPER_COUNTS,
-    }
-
-    with tr.step("vstar", "exact V* (modified policy iteration)") as adv:
-        res = solve_exact(
-            mdp, "mpi", callback=lambda it, r: adv(status=f"iteration {it}  residual {r:.1e}")
+    t_start = time.perf_counter()
+    tr = Tracker(progress)
+    outdir = Path(out)
+    target = AtomicDirectory(outdir)
+    with target as tmp:
+        built, counts = build_model(params, tr)
+        vs = solve_vstar(built, tr)
+        bounds = solve_bounds(params, solver, tr)
+        gen = check_general(built, bounds, general, tr)
+        lemma3 = check_lemma3(params, built, gen, n_examples, tr)
+        claims = check_claims(params, built, vs, n_examples, tr)
+        sp = check_sandwich(params, built, vs, bounds, tr)
+        mc = run_monte_carlo(
+            params, built, {"pi_star": vs.policy, "pi_s": sp.pi_s}, seeds, n_steps, tr
         )
-    vstar, pi_star = res.values, np.asarray(res.policy, dtype=np.int64)
-    err_v = res.error_bound
-    summary["vstar"] = {
-        "method": res.method,
-        "iterations": res.iterations,
-        "sweeps": res.sweeps,
-        "residual": res.residual,
-        "error_bound": res.error_bound,
-        "tol": res.tol,
-        "seconds": res.seconds,
-        "min": float(vstar.min()),
-        "max": float(vstar.max()),
-        "mean": float(vstar.mean()),
-        "policy_counts": {
-            mdp.action_names[a]: int(c)
-            for a, c in enumerate(np.bincount(pi_star, minlength=mdp.n_actions))
-        },
-    }
-
-    # ------------------------------------------------------------- 2. UBLP, LBLP
-    bounds: dict[str, Any] = {}
-    fp: dict[str, Any] = {}
-    solver_options = dict(SOLVER_OPTIONS.get(solver, {}))
-    lp_vals: dict[str, np.ndarray] = {}
-    with tr.step("bounds", f"UBLP and LBLP ({solver}) and their fixed points", 4) as adv:
-        for key, cls, kind in (("ublp", UBLP, "upper"), ("lblp", LBLP, "lower")):
-            lp = cls(params)
-            lp_res = lp.solve(solver=solver, **solver_options)
-            adv(status=f"{cls.name}: {lp_res.status}")
-            # policy iteration: exact LU evaluations (8 on the paper), few kernel launches
-            f = solve_exact(patrol_rows(params, kind), "pi")
-            fp[key] = f
-            adv(status=f"{cls.name} fixed point")
-            lp_vals[key] = np.asarray(lp_res.values, dtype=np.float64)
-            diff = float(np.abs(lp_vals[key] - f.values).max())
-            bounds[key] = {
-                "solver": lp_res.solver,
-                "solver_options": solver_options,
-                "status": str(lp_res.status),
-                "n_rows": int(lp.rows.n_rows),
-                "objective": float(lp_res.objective),
-                "primal_residual": float(lp_res.primal_residual),
-                "residual_tol": float(lp_res.residual_tol),
-                "dual_residual": _f(lp_res.dual_residual),
-                "gap": _f(lp_res.gap),
-                "solve_seconds": _f(lp_res.solve_seconds),
-                "compile_seconds": _f(lp_res.compile_seconds),
-                "fixed_point_seconds": f.seconds,
-                "fixed_point_residual": f.residual,
-                "fixed_point_error_bound": f.error_bound,
-                "lp_minus_fixed_point_max_abs": diff,
-                "lp_values_min": float(np.min(lp_res.values)),
-                "lp_values_max": float(np.max(lp_res.values)),
-            }
-    v_up, w_low = fp["ublp"].values, fp["lblp"].values
-    err_up, err_low = fp["ublp"].error_bound, fp["lblp"].error_bound
-    summary["bounds"] = bounds
-
-    # general RLP / NLP of the full MDP (Theorems 3, 4)
-    with tr.step("general", "general RLP and NLP of the full MDP (Theorems 3, 4)", 3) as adv:
-        gres = general_bound_residuals(mdp, labels, part.n_partitions, v_up, w_low)
-        adv(status="residuals")
-        thm: dict[str, Any] = {"method": general, **gres}
-        # r_u(i): the reward is the same for every state of a partition (Section 4.2);
-        # then the max- and min-reduced aggregated rows (RLP, NLP) are the same rows
-        spread = _reward_spread(mdp, labels, part.n_partitions)
-        thm["reward_spread_within_partitions"] = spread
-        if general == "aggregate":
-            rlp_rows = BellmanRows.aggregate(mdp, part, reduce="max")
-            rlp = solve_exact(rlp_rows, "pi")
-            adv(status="RLP")
-            nlp_rows = rlp_rows if spread == 0.0 else BellmanRows.aggregate(mdp, part, reduce="min")
-            thm["nlp_rows_shared_with_rlp"] = nlp_rows is rlp_rows
-            nlp = solve_game(nlp_rows)
-            adv(status="NLP")
-            thm["rlp_rows"] = int(rlp_rows.n_rows)
-            thm["nlp_rows"] = int(nlp_rows.n_rows)
-            thm["rlp_error_bound"] = rlp.error_bound
-            thm["nlp_error_bound"] = nlp.error_bound
-            thm["theorem4_max_abs_diff"] = float(np.abs(rlp.values - v_up).max())
-            thm["theorem3_max_abs_diff"] = float(np.abs(nlp.values - w_low).max())
-            thm["tolerance_theorem4"] = rlp.error_bound + err_up
-            thm["tolerance_theorem3"] = nlp.error_bound + err_low
-            # |T(i, u)| counted from the full MDP: distinct aggregated rows per (i, u)
-            counted = np.zeros((part.n_partitions, 3), dtype=np.int64)
-            np.add.at(counted, (rlp_rows.owner.astype(np.int64), rlp_rows.action), 1)
-        else:
-            thm["theorem4_max_abs_diff"] = gres["rlp_distance_bound"]
-            thm["theorem3_max_abs_diff"] = gres["nlp_distance_bound"]
-            thm["tolerance_theorem4"] = err_up
-            thm["tolerance_theorem3"] = err_low
-            counted = None
-            adv(2)
-    summary["theorems"] = thm
-    summary["theorem3_max_abs_diff"] = thm["theorem3_max_abs_diff"]
-    summary["theorem4_max_abs_diff"] = thm["theorem4_max_abs_diff"]
-
-    with tr.step("lemma3", "Lemma 3: |T(i, u)|") as adv:
-        card = lemma3_cardinality(params)
-        lem = card.summary()
-        differs = card.differs
-        rows_d, acts_d = np.nonzero(differs)
-        lem["examples"] = [
-            {
-                "partition": int(i),
-                "action": mdp.action_names[int(a)],
-                "taubar": int(card.taubar[i]),
-                "construction": int(card.construction[i, a]),
-                "paper": int(card.paper[i, a]),
-            }
-            for i, a in zip(rows_d[:n_examples], acts_d[:n_examples], strict=True)
-        ]
-        if counted is not None:
-            lem["full_mdp_rows_equal_construction"] = bool(
-                np.array_equal(counted, card.construction)
-            )
-            lem["full_mdp_rows_differ_pairs"] = int((counted != card.construction).sum())
-        summary["lemma3"] = lem
-        adv(status=f"{lem['pairs_differing']} pairs differ")
-
-    # ------------------------------------------------------------- 3. Claims 1-2
-    with tr.step("claims", "Claims 1-2: monotonicity on all ordered pairs", 2) as adv:
-        tol_claim = 2.0 * err_v
-        st_arr = np.asarray(params.stations)
-        acc = dict.fromkeys(
-            ("pairs", "violations", "new_alert", "new_alert_own", "same", "same_pairs"), 0
+        files = draw_figures(params, built, vs, bounds, sp, mc, tmp, tr) if figures else {}
+        summary = Summary(
+            instance=name,
+            params=params.to_table(),
+            machine=_machine(),
+            date=time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+            n_states=counts.n_states_counted,
+            n_partitions=counts.n_partitions_counted,
+            counts=counts,
+            vstar=vs.summary,
+            bounds=bounds.summaries,
+            theorems=gen.summary,
+            theorem3_max_abs_diff=gen.summary.theorem3_max_abs_diff,
+            theorem4_max_abs_diff=gen.summary.theorem4_max_abs_diff,
+            lemma3=lemma3,
+            claims=claims,
+            claim2_violations=claims.violations,
+            sandwich=sp.sandwich,
+            policy=sp.policy,
+            monte_carlo=mc.summary,
+            paper_table1=PAPER_TABLE1,
+            **_timing(tr, t_start),
         )
-        max_excess, max_same = -np.inf, -np.inf
-        cand: list[tuple[float, int, int, int]] = []
-        for j, x1, x2 in claim_pairs(pm, comps):
-            excess = vstar[x1] - vstar[x2]  # Claim 2 says <= 0
-            bad = excess > tol_claim
-            new_alert = comps[x2, 3 + j] == 0
-            at_own = (comps[x2, 0] == st_arr[j]) & (comps[x2, 2] == 0)
-            acc["pairs"] += x1.size
-            acc["violations"] += int(bad.sum())
-            acc["new_alert"] += int((bad & new_alert).sum())
-            acc["new_alert_own"] += int((bad & new_alert & at_own).sum())
-            acc["same"] += int((bad & ~new_alert).sum())
-            acc["same_pairs"] += int((~new_alert).sum())
-            if x1.size:
-                max_excess = max(max_excess, float(excess.max()))
-            if (~new_alert).any():
-                max_same = max(max_same, float(excess[~new_alert].max()))
-            top = np.flatnonzero(bad)
-            top = top[np.argsort(-excess[top])[:n_examples]]
-            for k in top:
-                cand.append((float(excess[k]), int(x1[k]), int(x2[k]), j))
-            del x1, x2, excess, bad, new_alert, at_own
-        cand.sort(reverse=True)
-        claims = {
-            "pairs": acc["pairs"],
-            "tolerance": tol_claim,
-            "violations": acc["violations"],
-            "max_excess": max_excess,
-            "violations_new_alert": acc["new_alert"],
-            "violations_new_alert_own_station": acc["new_alert_own"],
-            "violations_same_alert_status": acc["same"],
-            "pairs_same_alert_status": acc["same_pairs"],
-            "max_excess_same_alert_status": max_same if np.isfinite(max_same) else None,
-            "examples": [
-                {
-                    "x1": _state_dict(comps, a1, params.stations),
-                    "x2": _state_dict(comps, a2, params.stations),
-                    "station": int(params.stations[j]),
-                    "vstar_x1": float(vstar[a1]),
-                    "vstar_x2": float(vstar[a2]),
-                    "excess": ex,
-                }
-                for ex, a1, a2, j in cand[:n_examples]
-            ],
-        }
-        adv(status=f"{claims['violations']} of {claims['pairs']:,} pairs violate")
-        vmin_part = part.aggregate(vstar, "min")
-        hi, lo = _partition_pairs(pm, pcomps)
-        pexcess = vmin_part[hi] - vmin_part[lo]
-        pbad = pexcess > tol_claim
-        pw = np.flatnonzero(pbad)
-        pw = pw[np.argsort(-pexcess[pw])][:n_examples]
-        claims["partition_pairs"] = int(hi.size)
-        claims["partition_violations"] = int(pbad.sum())
-        claims["partition_max_excess"] = float(pexcess.max()) if hi.size else None
-        claims["partition_examples"] = [
-            {
-                "higher": pcomps[hi[k]].tolist(),
-                "lower": pcomps[lo[k]].tolist(),
-                "excess": float(pexcess[k]),
-            }
-            for k in pw
-        ]
-        # the chain of Figure 4
-        idx4, _, _ = figs.select_min_value_partitions(comps, params.stations)
-        chain = np.unique(labels[idx4])
-        ch_tb = pcomps[chain, -1]
-        chain = chain[np.argsort(ch_tb)]
-        steps = np.diff(vmin_part[chain])
-        claims["figure4_chain"] = {
-            "taubar": pcomps[chain, -1].tolist(),
-            "min_vstar": vmin_part[chain].tolist(),
-            "non_increasing": bool((steps <= tol_claim).all()),
-        }
-        adv(status=f"partitions: {claims['partition_violations']} violate")
-    summary["claims"] = claims
-    summary["claim2_violations"] = claims["violations"]
+        arrays = _arrays(built, vs, bounds, sp)
+        files.update(write_outputs(summary, arrays, files, tmp, tr, t_start))
+        checkpoint("commit")
+        target.commit({"instance": name})
+    files = {k: outdir / Path(p).relative_to(tmp) for k, p in files.items()}
+    files["manifest"] = outdir / MANIFEST
+    return Reproduction(
+        summary=to_dict(summary), out=outdir, files=files, arrays=arrays, result=summary
+    )
 
-    # ------------------------------------------------------------- 4. sandwich, pi_s
-    with tr.step("sandwich", "sandwich, greedy policy pi_s and V_sub", 3) as adv:
-        v_low_s = w_low[labels]
-        v_up_s = v_up[labels]
-        lower = _err_le(v_low_s, vstar, err_low + err_v)
-        upper = _err_le(vstar, v_up_s, err_up + err_v)
-        lower["worst_state"] = _state_dict(comps, lower.pop("worst_index"), params.stations)
-        upper["worst_state"] = _state_dict(comps, upper.pop("worst_index"), params.stations)
-        gap = v_up - w_low
-        sandwich = {
-            "lower_margin": lower["margin"],
-            "upper_margin": upper["margin"],
-            "lower": lower,
-            "upper": upper,
-            "partition_gap_max": float(gap.max()),
-            "partition_gap_mean": float(gap.mean()),
-            "mean_vstar_minus_vlow": float((vstar - v_low_s).mean()),
-            "mean_vup_minus_vstar": float((v_up_s - vstar).mean()),
-            # the same margins with the LP solutions in place of the fixed points
-            "lp_lower_margin": float((vmin_part - lp_vals["lblp"]).min()),
-            "lp_upper_margin": float((lp_vals["ublp"] - part.aggregate(vstar, "max")).min()),
-        }
-        adv(status="sandwich")
-        pi_s = np.asarray(greedy_policy(mdp, v_low_s), dtype=np.int64)
-        adv(status="greedy policy")
-        ev = evaluate_policy(mdp, pi_s, method="iterative")
-        vsub = ev.values
-        adv(status="V_sub")
-        tol_sub = ev.error_bound + err_low
-        chain_checks = {
-            "vlow_le_vsub": _err_le(v_low_s, vsub, tol_sub),
-            "vsub_le_vstar": _err_le(vsub, vstar, ev.error_bound + err_v),
-            "vstar_le_vup": _err_le(vstar, v_up_s, err_up + err_v),
-        }
-        for c in chain_checks.values():
-            c["worst_state"] = _state_dict(comps, c.pop("worst_index"), params.stations)
-        q = exact_rows(mdp).q_values(vstar)
-        rows_ex = exact_rows(mdp)
-        assert rows_ex.pair_row is not None
-        q_pis = q[rows_ex.pair_row[np.arange(mdp.n_states), pi_s]]
-        loss = vstar - q_pis
-        differs = pi_s != pi_star
-        policy = {
-            "differs_fraction": float(differs.mean()),
-            "differs_states": int(differs.sum()),
-            "suboptimal_fraction": float((loss > 2 * err_v).mean()),
-            "suboptimal_tolerance": 2 * err_v,
-            "max_one_step_loss": float(loss.max()),
-            "max_vstar_minus_vsub": float((vstar - vsub).max()),
-            "max_vstar_minus_vsub_state": _state_dict(
-                comps, int(np.argmax(vstar - vsub)), params.stations
-            ),
-            "mean_vstar_minus_vsub": float((vstar - vsub).mean()),
-            "vsub_residual": ev.residual,
-            "vsub_error_bound": ev.error_bound,
-            "vsub_sweeps": ev.sweeps,
-            "vsub_method": ev.method,
-            "chain": chain_checks,
-            "pi_s_counts": {
-                mdp.action_names[a]: int(c)
-                for a, c in enumerate(np.bincount(pi_s, minlength=mdp.n_actions))
-            },
-        }
-    summary["sandwich"] = sandwich
-    summary["policy"] = policy
 
-    # ------------------------------------------------------------- 5. Monte Carlo
-    sims: dict[str, list[Any]] = {"pi_star": [], "pi_s": []}
-    with tr.step(
-        "monte_carlo", f"Monte Carlo: {len(seeds)} seeds x {n_steps:,} steps", 2 * len(seeds)
-    ) as adv:
-        p0 = float(params.alert_probabilities()[0])
-        for s in seeds:
-            y = alert_sequence(n_steps, p0, params.m, s)
-            for key, pol in (("pi_star", pi_star), ("pi_s", pi_s)):
-                r = simulate(pm, pol, y, policy_name=key, seed=s, components=comps)
-                if r.mismatches:
-                    raise AssertionError(
-                        f"simulation of {key} (seed {s}): the model's successor disagrees "
-                        f"with the spec's dynamics on {r.mismatches} steps "
-                        f"(first at step {r.first_mismatch})"
-                    )
-                sims[key].append(r)
-                adv(status=f"seed {s}, {key}")
-    mc = {k: pooled_statistics(v) for k, v in sims.items()}
-    mc["seeds"] = seeds
-    mc["n_steps_per_seed"] = n_steps
-    mc["conventions"] = _conventions(mc)
-    summary["monte_carlo"] = mc
-    summary["paper_table1"] = PAPER_TABLE1
-
-    # ------------------------------------------------------------- 6. figures
-    if figures:
-        with tr.step("figures", "figures 2-7", 6) as adv:
-            files["fig2"] = figs.plot_information(params, outdir / "fig2_information.png")
-            adv()
-            files["fig3"] = figs.plot_ordered_states(
-                comps, params.stations, vstar, outdir / "fig3_ordered_states.png"
-            )
-            adv()
-            files["fig4"] = figs.plot_min_value_partitions(
-                comps, params.stations, vstar, outdir / "fig4_min_value_partitions.png"
-            )
-            adv()
-            files["fig5"] = figs.plot_bounds(
-                pcomps, labels, vstar, v_up, w_low, params.N, outdir / "fig5_bounds.png"
-            )
-            adv()
-            files["fig6"] = figs.plot_vsub(
-                pcomps, labels, vstar, vsub, params.N, outdir / "fig6_vsub.png"
-            )
-            adv()
-            files["fig7"] = figs.plot_histograms(
-                {k: np.concatenate([r.delay for r in v]) for k, v in sims.items()},
-                {k: np.concatenate([r.loiters[r.complete] for r in v]) for k, v in sims.items()},
-                outdir / "fig7_histograms.png",
-            )
-            adv()
-
-    # ------------------------------------------------------------- 8. arrays
-    arrays = {
-        "vstar": vstar,
-        "pi_star": pi_star.astype(np.int8),
-        "state_components": comps.astype(np.int16),
-        "lower": w_low,
-        "upper": v_up,
-        "partition_components": pcomps.astype(np.int16),
-        "partition_of_state": labels.astype(np.int32),
-        "vsub": vsub,
-        "pi_s": pi_s.astype(np.int8),
+def _arrays(
+    built: BuiltModel, vs: VStar, bounds: Bounds, sp: SandwichAndPolicy
+) -> dict[str, np.ndarray]:
+    """The large arrays of ``values.npz``."""
+    return {
+        "vstar": vs.values,
+        "pi_star": vs.policy.astype(np.int8),
+        "state_components": built.comps.astype(np.int16),
+        "lower": bounds.w_low,
+        "upper": bounds.v_up,
+        "partition_components": built.pcomps.astype(np.int16),
+        "partition_of_state": built.labels.astype(np.int32),
+        "vsub": sp.vsub,
+        "pi_s": sp.pi_s.astype(np.int8),
     }
-    with tr.step("write", "writing values.npz, summary.json, report.md") as adv:
-        files["values"] = outdir / "values.npz"
+
+
+def _timing(tr: Tracker, t_start: float) -> dict[str, Any]:
+    return {
+        "seconds": dict(tr.seconds),
+        "peak_rss_mb": dict(tr.peak_rss_mb),
+        "cpu_seconds": dict(tr.cpu_seconds),
+        "seconds_total": time.perf_counter() - t_start,
+    }
+
+
+def write_outputs(
+    summary: Summary,
+    arrays: dict[str, np.ndarray],
+    figures: dict[str, Path],
+    folder: Path,
+    tr: Tracker,
+    t_start: float,
+) -> dict[str, Path]:
+    """Step 7: ``values.npz``, ``report.md`` and ``summary.json`` (with the final times)
+    in ``folder`` (the temporary folder :func:`reproduce` moves into place)."""
+    files = {"values": folder / "values.npz", "summary": folder / "summary.json"}
+    with tr.step("write", "writing values.npz, summary.json, report.md"):
         np.savez(files["values"], **arrays)
-        summary["seconds"] = dict(tr.seconds)
-        summary["peak_rss_mb"] = dict(tr.peak_rss_mb)
-        summary["cpu_seconds"] = dict(tr.cpu_seconds)
-        summary["seconds_total"] = time.perf_counter() - t_start
-        files["summary"] = outdir / "summary.json"
-        from .report import write_report
+        for key, value in _timing(tr, t_start).items():
+            setattr(summary, key, value)
+        files["report"] = write_report(summary, {**figures, **files}, folder / "report.md")
+    for key, value in _timing(tr, t_start).items():
+        setattr(summary, key, value)
+    files["summary"].write_text(json.dumps(jsonable(summary), indent=2) + "\n")
+    return files
 
-        files["report"] = write_report(summary, files, outdir / "report.md")
-    summary["seconds"] = dict(tr.seconds)
-    summary["peak_rss_mb"] = dict(tr.peak_rss_mb)
-    summary["cpu_seconds"] = dict(tr.cpu_seconds)
-    summary["seconds_total"] = time.perf_counter() - t_start
-    files["summary"].write_text(json.dumps(_jsonable(summary), indent=2) + "\n")
-    return Reproduction(summary=summary, out=outdir, files=files, arrays=arrays)
+
+def _action_counts(mdp: Any, policy: np.ndarray) -> dict[str, int]:
+    return {
+        mdp.action_names[a]: int(c)
+        for a, c in enumerate(np.bincount(policy, minlength=mdp.n_actions))
+    }
 
 
 def _f(x: Any) -> float | None:
