@@ -468,6 +468,9 @@ class Formulation:
         obj = float(self.c @ x)
         gap = abs(obj - float(self.b @ y))
         cert = self._certify(x)
+        lower: np.ndarray | None = None
+        upper: np.ndarray | None = None
+        bracket: tuple[float, float] | None = None
         if cert is not None:
             lower, upper, bracket = self._bracket(cert)
             if bracket is not None and run.y is not None:
@@ -477,7 +480,6 @@ class Formulation:
             accurate = self._accurate(cert, accuracy, obj, bracket)
             err = cert.error_bound
         else:
-            lower = upper = bracket = None
             tol = accuracy * float(np.abs(self.b).max(initial=0.0))
             accurate = primal <= tol
             err = float("inf")
