@@ -7,13 +7,22 @@ import argparse
 import math
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 from rich.console import Console
-from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+from rich.progress import (
+    BarColumn,
+    Progress,
+    SpinnerColumn,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+)
 
 from ..outputs import check_output_dir, check_output_file
 
 __all__ = [
+    "LazyProgress",
     "add_model_argument",
     "check_output_dir",
     "check_output_file",
@@ -29,19 +38,50 @@ console = Console()
 err_console = Console(stderr=True)
 
 
+class LazyProgress:
+    """A rich :class:`~rich.progress.Progress` that starts drawing at its first task, so a
+    command rejected before any work prints its one error line and nothing else."""
+
+    def __init__(self, prog: Progress) -> None:
+        self._prog = prog
+        self._started = False
+
+    def add_task(self, *args: Any, **kwargs: Any) -> TaskID:
+        if not self._started:
+            self._prog.start()
+            self._started = True
+        return self._prog.add_task(*args, **kwargs)
+
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        self._prog.update(*args, **kwargs)
+
+    def advance(self, *args: Any, **kwargs: Any) -> None:
+        self._prog.advance(*args, **kwargs)
+
+    def stop(self) -> None:
+        if self._started:
+            self._prog.stop()
+
+
 @contextmanager
-def progress(transient: bool = True) -> Iterator[Progress]:
-    """A rich progress display on stderr (quiet when stderr is not a terminal)."""
-    with Progress(
-        SpinnerColumn(),
-        TextColumn("[progress.description]{task.description}"),
-        BarColumn(),
-        TextColumn("{task.fields[status]}"),
-        TimeElapsedColumn(),
-        console=err_console,
-        transient=transient,
-    ) as prog:
-        yield prog
+def progress(transient: bool = True) -> Iterator[LazyProgress]:
+    """A rich progress display on stderr (quiet when stderr is not a terminal), drawn from
+    the first task on."""
+    lazy = LazyProgress(
+        Progress(
+            SpinnerColumn(),
+            TextColumn("[progress.description]{task.description}"),
+            BarColumn(),
+            TextColumn("{task.fields[status]}"),
+            TimeElapsedColumn(),
+            console=err_console,
+            transient=transient,
+        )
+    )
+    try:
+        yield lazy
+    finally:
+        lazy.stop()
 
 
 def add_model_argument(parser: argparse.ArgumentParser, default: str | None = None) -> None:

@@ -1,0 +1,267 @@
+"""The command line never shows a traceback for a user error: one line on stderr and a
+documented exit status (2 input/usage, 1 computation failed), and every output is
+checked before any computation (the computation is replaced here by a function that
+fails the test if it is ever called)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import lpbounds.patrol.reproduce as rp
+from lpbounds.cli import bounds as cli_bounds
+from lpbounds.cli import solve as cli_solve
+from lpbounds.cli.main import EXIT_CODES, main
+from lpbounds.errors import ConvergenceError, OutputError
+from lpbounds.outputs import AtomicDirectory, check_output_dir, check_output_file
+
+SMALL = "models/patrol-small.toml"
+QUICK = ["--seeds", "1", "--steps", "200", "--no-figures"]
+
+
+def _never(*args, **kwargs):
+    raise AssertionError("computation started although an input or output is bad")
+
+
+@pytest.fixture
+def no_computation(monkeypatch):
+    """Any computation (of reproduce, solve or bounds) fails the test."""
+    monkeypatch.setattr(rp, "build_model", _never)
+    monkeypatch.setattr(cli_solve, "solve_exact", _never)
+    monkeypatch.setattr(cli_bounds, "solve_exact", _never)
+
+
+def _one_line_error(capsys, *fragments: str, after_progress: bool = False) -> str:
+    """The error is one line, the last on stderr; before it only finished progress lines
+    (``after_progress``) or nothing at all."""
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    lines = err.splitlines()
+    assert lines and lines[-1].startswith("lpbounds "), err
+    assert len(lines) == 1 or after_progress, err
+    for f in fragments:
+        assert f in lines[-1], (f, err)
+    return lines[-1]
+
+
+def _unwritable_dir(tmp_path: Path) -> Path:
+    """A folder no file can be created in, also for root (a read-only bind is not
+    available everywhere; /proc refuses new files for everyone)."""
+    if sys.platform.startswith("linux") and Path("/proc").is_dir():
+        return Path("/proc")
+    if os.geteuid() == 0:  # pragma: no cover
+        pytest.skip("no unwritable directory for root on this platform")
+    d = tmp_path / "ro"
+    d.mkdir()
+    d.chmod(0o555)
+    return d
+
+
+# ---------------------------------------------------------------------- reproduce --out
+def test_out_that_is_a_file_is_rejected_before_any_computation(tmp_path, capsys, no_computation):
+    f = tmp_path / "taken"
+    f.write_text("mine")
+    assert main(["reproduce", SMALL, "--out", str(f), *QUICK]) == 2
+    _one_line_error(capsys, "--out", "not a directory")
+    assert f.read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
+
+
+def test_out_below_a_file_is_rejected(tmp_path, capsys, no_computation):
+    f = tmp_path / "file"
+    f.write_text("")
+    assert main(["reproduce", SMALL, "--out", str(f / "sub" / "out"), *QUICK]) == 2
+    _one_line_error(capsys, "--out")
+
+
+def test_out_in_an_unwritable_folder_is_rejected(tmp_path, capsys, no_computation):
+    ro = _unwritable_dir(tmp_path)
+    assert main(["reproduce", SMALL, "--out", str(ro / "lpbounds-out"), *QUICK]) == 2
+    _one_line_error(capsys, "--out", "cannot write")
+    assert not (ro / "lpbounds-out").exists()
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--seeds", "-1"],
+        ["--seeds", "1", "x"],
+        ["--seeds", "1.5"],
+        ["--steps", "0"],
+        ["--steps", "-3"],
+        ["--steps", "ten"],
+        ["--general", "both"],
+    ],
+)
+def test_bad_numbers_are_rejected_by_argparse(tmp_path, capsys, args, no_computation):
+    out = tmp_path / "o"
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce", SMALL, "--out", str(out), *args])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "error: argument" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("model", "fragment"),
+    [
+        ("models/garnet-small.toml", "patrol"),
+        ("no-such-model", "no instance file"),
+        (".", "directory"),
+    ],
+)
+def test_a_rejected_model_creates_nothing(tmp_path, capsys, model, fragment, no_computation):
+    out = tmp_path / "o"
+    assert main(["reproduce", model, "--out", str(out), *QUICK]) == 2
+    _one_line_error(capsys, fragment)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_model_with_wrong_toml_creates_nothing(tmp_path, capsys, no_computation):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[model\nkind = 'patrol'\n")
+    out = tmp_path / "o"
+    assert main(["reproduce", str(bad), "--out", str(out), *QUICK]) == 2
+    _one_line_error(capsys, "not valid TOML")
+    assert not out.exists()
+
+
+def test_a_held_lock_is_named_and_nothing_is_written(tmp_path, capsys, no_computation):
+    out = tmp_path / "o"
+    lock = tmp_path / ".o.lock"
+    lock.write_text(f"{os.getpid()}\n")  # a live process holds it
+    assert main(["reproduce", SMALL, "--out", str(out), *QUICK]) == 2
+    _one_line_error(capsys, "locked by another run", str(lock), str(os.getpid()))
+    assert lock.exists() and not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".o.lock"]
+
+
+def test_a_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    out = tmp_path / "o"
+    (tmp_path / ".o.lock").write_text(f"{dead.pid}\n")
+    target = AtomicDirectory(out)
+    with target as tmp:
+        (tmp / "a.txt").write_text("a")
+        target.commit()
+    assert (out / "a.txt").read_text() == "a"
+    assert not (tmp_path / ".o.lock").exists()
+
+
+def test_a_failed_computation_exits_1_and_keeps_the_previous_output(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "summary.json").write_text("{}")
+
+    def fail(*a, **k):
+        raise ConvergenceError("no convergence in 3 iterations")
+
+    monkeypatch.setattr(rp, "solve_vstar", fail)
+    assert main(["reproduce", SMALL, "--out", str(out), *QUICK]) == 1
+    _one_line_error(capsys, "no convergence", after_progress=True)
+    assert [p.name for p in out.iterdir()] == ["summary.json"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]  # no partial folder, no lock
+
+
+# ---------------------------------------------------------------------- --json of solve, bounds
+@pytest.mark.parametrize("command", ["solve", "bounds"])
+def test_json_that_is_a_directory_is_rejected_before_any_computation(
+    tmp_path, capsys, command, no_computation
+):
+    model = "garnet-small" if command == "solve" else "patrol-small"
+    assert main([command, model, "--json", str(tmp_path)]) == 2
+    _one_line_error(capsys, "--json", "is a directory")
+
+
+@pytest.mark.parametrize("command", ["solve", "bounds"])
+def test_json_in_an_unwritable_folder_is_rejected(tmp_path, capsys, command, no_computation):
+    model = "garnet-small" if command == "solve" else "patrol-small"
+    target = _unwritable_dir(tmp_path) / "stats.json"
+    assert main([command, model, "--json", str(target)]) == 2
+    _one_line_error(capsys, "--json", "cannot write")
+
+
+@pytest.mark.parametrize(
+    "args", [["--tol", "-1"], ["--tol", "nan"], ["--tol", "inf"], ["--max-iter", "0"]]
+)
+def test_solve_bad_numbers_are_rejected_by_argparse(capsys, args, no_computation):
+    with pytest.raises(SystemExit) as exc:
+        main(["solve", "garnet-small", *args])
+    assert exc.value.code == 2
+    assert "Traceback" not in capsys.readouterr().err
+
+
+def test_bounds_negative_limit_is_rejected_by_argparse(capsys, no_computation):
+    with pytest.raises(SystemExit) as exc:
+        main(["bounds", "patrol-small", "--lp-max-partitions", "-5"])
+    assert exc.value.code == 2
+
+
+def test_solve_json_is_written_whole(tmp_path):
+    target = tmp_path / "deep" / "s.json"
+    assert main(["solve", "garnet-small", "--method", "pi", "--json", str(target)]) == 0
+    assert json.loads(target.read_text())["n_states"] == 300
+    assert sorted(p.name for p in target.parent.iterdir()) == ["s.json"]  # no temporary
+
+
+# ---------------------------------------------------------------------- the documentation
+def test_help_documents_the_exit_codes(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert "exit status" in out
+    for code in (0, 1, 2, 130):
+        assert f"  {code} " in out, code
+    assert set(EXIT_CODES) == {0, 1, 2, 130}
+
+
+def test_console_script_prints_one_line_for_a_bad_out(tmp_path):
+    f = tmp_path / "file"
+    f.write_text("")
+    proc = subprocess.run(
+        [sys.executable, "-m", "lpbounds.cli.main", "reproduce", SMALL, "--out", str(f)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip().count("\n") == 0 and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith("lpbounds reproduce: error: --out")
+
+
+# ---------------------------------------------------------------------- the library helpers
+def test_check_helpers_raise_output_error(tmp_path):
+    f = tmp_path / "f"
+    f.write_text("")
+    with pytest.raises(OutputError, match="not a directory"):
+        check_output_dir(f)
+    with pytest.raises(OutputError, match="is a directory"):
+        check_output_file(tmp_path)
+    assert check_output_dir(tmp_path / "new" / "deeper") == tmp_path / "new" / "deeper"
+    assert not (tmp_path / "new").exists()  # a check creates nothing
+    with pytest.raises(OutputError):
+        rp.reproduce(SMALL, f, seeds=(1,), n_steps=10, figures=False)
+
+
+def test_atomic_directory_replaces_the_previous_output_only_on_commit(tmp_path):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "old.txt").write_text("old")
+    with pytest.raises(RuntimeError), AtomicDirectory(out) as tmp:
+        (tmp / "new.txt").write_text("new")
+        raise RuntimeError("boom")
+    assert [p.name for p in out.iterdir()] == ["old.txt"]
+    target = AtomicDirectory(out)
+    with target as tmp:
+        (tmp / "new.txt").write_text("new")
+        target.commit()
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "new.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
