@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import lpbounds as lb
+from lpbounds.dp import exact_rows
 from lpbounds.errors import ConvergenceError, ValidationError
 
 from .conftest import reference_bellman, reference_solve, two_state_closed_form, two_state_mdp
@@ -185,3 +186,88 @@ def test_property_all_methods_agree(n, a, ll, lam, seed):
     for m in METHODS:
         res = lb.solve_exact(mdp, m)
         assert np.abs(res.values - ref).max() <= res.error_bound + 1e-9 * max(1, abs(ref).max())
+
+
+# ---------------------------------------------------------------------- issue 10 item 4
+def test_status_is_the_single_source_of_truth():
+    """OPTIMAL when the residual reached tol, ITERATION_LIMIT at max_iter; ``converged``
+    is derived from the status (not a second stored flag that could disagree)."""
+    import dataclasses
+
+    from lpbounds.status import Status
+
+    mdp = lb.garnet(30, 2, 2, 0.99, seed=1)
+    done = lb.solve_exact(mdp, "vi")
+    assert done.status is Status.OPTIMAL and done.converged and done.residual <= done.tol
+    cut = lb.solve_exact(mdp, "vi", max_iter=2, extrapolate=False, raise_on_failure=False)
+    assert cut.status is Status.ITERATION_LIMIT and not cut.converged
+    assert cut.residual > cut.tol
+    # the bound stays valid at the limit: V* from an independent solve is within it
+    assert np.abs(cut.values - reference_solve(mdp)).max() <= cut.error_bound
+    assert "converged" not in {f.name for f in dataclasses.fields(lb.DPResult)}
+    game = lb.solve_game(lb.BellmanRows.aggregate(mdp, lb.random_partition(30, 4)))
+    assert game.status is Status.OPTIMAL and game.converged
+
+
+def test_values_near_the_float64_limit_are_exact_not_zero():
+    """Rewards of 1e298 at discount 0.9 (|V*| up to 2e299): the scale is computed without
+    overflow and the values are the closed form times 1e298 (they used to be 0 at 1e307
+    with ``converged=True``)."""
+    succ = np.array([[[0], [1]], [[1], [1]]])
+    allowed = np.array([[True, True], [True, False]])
+    for sign in (1.0, -1.0):
+        rewards = sign * 1e298 * np.array([[1.0, 0.0], [2.0, 0.0]])
+        mdp = lb.FiniteMDP(succ, [1.0], rewards, 0.9, allowed)
+        for method in METHODS:
+            res = lb.solve_exact(mdp, method)
+            assert res.converged and np.all(np.isfinite(res.values))
+            if sign > 0:
+                want = two_state_closed_form(0.9) * 1e298
+            else:  # both actions of state 0 are worth -1e298/(1-lam) paths; closed form
+                want = np.array([max(-1.0 / 0.1, 0.9 * -2.0 / 0.1), -2.0 / 0.1]) * 1e298
+            # the promise: within error_bound (about 1e-9 relative at the default tol)
+            assert np.abs(res.values - want).max() <= res.error_bound, method
+            assert res.error_bound <= 1e-8 * np.abs(want).max(), method
+
+
+@pytest.mark.parametrize("scale", [1e307, 1e308, -1e308])
+def test_rewards_whose_values_overflow_are_refused(scale):
+    succ = np.array([[[0], [1]], [[1], [1]]])
+    with pytest.raises(ValidationError, match=r"rewards: max\|R\|.*overflow"):
+        lb.FiniteMDP(succ, [1.0], np.array([[1.0, 0.0], [0.5, 0.0]]) * scale, 0.9)
+    with pytest.raises(ValidationError, match=r"reward: max\|R\|.*overflow"):
+        lb.BellmanRows.from_arrays([0, 1], [0, 0], [scale, 0.0], [[0], [1]], [1.0], 0.9, 2)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_initial_must_be_finite(method, bad):
+    mdp = two_state_mdp()
+    with pytest.raises(ValidationError, match=r"initial\[1\] = .* is not finite"):
+        lb.solve_exact(mdp, method, initial=[0.0, bad])
+    with pytest.raises(ValidationError, match=r"initial\[0\] = .* is not finite"):
+        lb.solve_game(exact_rows(mdp), initial=[bad, 0.0])
+
+
+def test_overflowing_iterates_raise_instead_of_returning_nan():
+    """Discount 1 - 1e-12 and a start of +-1e300: the Porteus shift lam/(1-lam) * span
+    overflows. Even with raise_on_failure=False no result with NaN values is returned."""
+    succ = np.array([[[1]], [[1]]])
+    mdp = lb.FiniteMDP(succ, [1.0], [[0.0], [1.0]], 1 - 1e-12)
+    with pytest.raises(ConvergenceError, match="non-finite values"):
+        lb.solve_exact(mdp, "vi", initial=[1e300, -1e300], max_iter=50, raise_on_failure=False)
+
+
+def test_nan_values_are_refused_not_half_a_policy():
+    """greedy_policy with a NaN used to return 5 actions for 10 states; porteus_bounds an
+    empty policy. Now: a ValidationError naming the entry; finite values give n actions."""
+    mdp = lb.garnet(10, 3, 2, 0.9, seed=2)
+    v = reference_solve(mdp)
+    assert lb.greedy_policy(mdp, v).shape == (10,)
+    v[7] = np.nan
+    for func in (lb.greedy_policy, lb.porteus_bounds, lb.bellman_residual):
+        with pytest.raises(ValidationError, match=r"values\[7\] = nan"):
+            func(mdp, v)
+    for tie in (-1.0, np.nan, np.inf):
+        with pytest.raises(ValidationError, match="tie_rtol"):
+            lb.greedy_policy(mdp, np.zeros(10), tie_rtol=tie)

@@ -209,3 +209,25 @@ def test_disallowed_successors_out_of_range_are_made_self_loops_on_a_copy():
     np.testing.assert_array_equal(mdp.successors[1, 1], [1, 1])
     np.testing.assert_array_equal(succ, given)  # the caller's array is untouched
     assert mdp.rewards[1, 1] == 0.0  # disallowed rewards are stored as 0
+
+
+def test_indices_are_range_checked_before_the_cast_to_int32():
+    """An int64 successor 2**32 + 1 used to be cast to int32 first and wrap to state 1."""
+    succ, probs, rewards = _arrays()
+    succ = succ.astype(np.int64)
+    succ[2, 1, 0] = 2**32 + 1
+    assert np.int32(succ[2, 1, 0].astype(np.int32)) == 1  # what the old cast produced
+    with pytest.raises(ValidationError, match=r"successors\[2, 1, 0\] = 4294967297 is out of"):
+        lb.FiniteMDP(succ, probs, rewards, 0.9)
+    # on a disallowed pair the same entry is never read: stored as a self-loop
+    allowed = np.ones((3, 2), bool)
+    allowed[2, 1] = False
+    mdp = lb.FiniteMDP(succ, probs, rewards, 0.9, allowed)
+    np.testing.assert_array_equal(mdp.successors[2, 1], [2] * succ.shape[2])
+
+
+@pytest.mark.parametrize("bad", [False, True, "0.9", None, 0.9 + 0j])
+def test_discount_is_never_coerced(bad):
+    succ, probs, rewards = _arrays()
+    with pytest.raises(ValidationError, match="discount must be a real number"):
+        lb.FiniteMDP(succ, probs, rewards, bad)

@@ -60,3 +60,13 @@ def test_random_partition_uses_every_index():
     assert sorted(part.labels.tolist()) == list(range(50))
     with pytest.raises(ValidationError):
         lb.random_partition(5, 6)
+
+
+def test_huge_label_is_refused_before_allocating():
+    """Partition([0, 2**40]) used to ask bincount for 2**40 counters (8 TiB)."""
+    with pytest.raises(ValidationError, match=r"labels\[1\] = 1099511627776 is out of range"):
+        lb.Partition(np.array([0, 2**40]))
+    with pytest.raises(ValidationError, match="n_partitions must lie in"):
+        lb.Partition([0, 1], n_partitions=2**40)
+    with pytest.raises(ValidationError, match="n_partitions must be an integer"):
+        lb.random_partition(10, 3.7)

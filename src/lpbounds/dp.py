@@ -52,7 +52,15 @@ from .mdp import FiniteMDP
 from .rows import BellmanRows, PostDecisionRows, _nchunks
 from .status import Status
 from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
-from .validation import check_array, check_bool, check_choice, check_int, check_real, check_vector
+from .validation import (
+    MAX_VALUE_SCALE,
+    check_array,
+    check_bool,
+    check_choice,
+    check_int,
+    check_real,
+    check_vector,
+)
 
 __all__ = [
     "DPResult",
@@ -116,10 +124,21 @@ def _default_tol(rows: BellmanRows | PostDecisionRows, tol: float | None) -> flo
 
 
 def _initial(initial: Any, n: int) -> np.ndarray:
-    """The starting vector: zeros, or ``initial`` checked finite and copied (once)."""
+    """The starting vector: zeros, or ``initial`` checked and copied (once).
+
+    Its entries must be finite and within ``MAX_VALUE_SCALE`` (the largest accepted
+    ``|V*|``): a starting point beyond every possible value only risks overflow.
+    """
     if initial is None:
         return np.zeros(n)
     v = check_vector("initial", initial, n)
+    big = np.abs(v) > MAX_VALUE_SCALE
+    if big.any():
+        i = int(np.flatnonzero(big)[0])
+        raise ValidationError(
+            f"initial[{i}] = {v[i]:.3g} exceeds {MAX_VALUE_SCALE:g} in magnitude "
+            "(no value function is that large: lpbounds.validation.MAX_VALUE_SCALE)"
+        )
     return v.copy() if v is initial else v
 
 
@@ -135,26 +154,32 @@ def _policy_out(model: Model, rows: BellmanRows, policy_rows: np.ndarray) -> np.
     return policy_rows
 
 
-def _check_policy(policy: Any, n: int) -> np.ndarray:
-    """A policy as an integer array of length ``n`` (index ranges are the caller's)."""
+def _check_policy(policy: Any, n: int, mdp: FiniteMDP | None = None) -> np.ndarray:
+    """A policy as an integer array of length ``n``; for an MDP, an allowed action per state.
+
+    Ranges are checked in the given dtype, before any narrowing cast.
+    """
     pol = check_array("policy", policy, integer=True)
     if pol.shape != (n,) or pol.dtype.kind not in "iu":
         raise ValidationError(f"a policy must be {n} integers; got {pol.shape} {pol.dtype}")
+    if mdp is not None:
+        bad = (pol < 0) | (pol >= mdp.n_actions)
+        if bad.any():
+            x = int(np.flatnonzero(bad)[0])
+            raise ValidationError(f"policy[{x}] = {int(pol[x])} is not an action index")
+        ok = mdp.allowed[np.arange(n), pol]
+        if not ok.all():
+            x = int(np.flatnonzero(~ok)[0])
+            raise ValidationError(f"policy[{x}] = {int(pol[x])} is not allowed in state {x}")
     return pol
 
 
 def _policy_rows(model: Model, rows: BellmanRows, policy: Any) -> np.ndarray:
-    pol = _check_policy(policy, rows.n_vars)
     if isinstance(model, FiniteMDP):
-        if (pol < 0).any() or (pol >= model.n_actions).any():
-            x = int(np.flatnonzero((pol < 0) | (pol >= model.n_actions))[0])
-            raise ValidationError(f"policy[{x}] = {int(pol[x])} is not an action index")
+        pol = _check_policy(policy, rows.n_vars, model)
         assert rows.pair_row is not None
-        sel = rows.pair_row[np.arange(rows.n_vars), pol]
-        if (sel < 0).any():
-            x = int(np.flatnonzero(sel < 0)[0])
-            raise ValidationError(f"policy[{x}] = {int(pol[x])} is not allowed in state {x}")
-        return sel
+        return rows.pair_row[np.arange(rows.n_vars), pol]
+    pol = _check_policy(policy, rows.n_vars)
     bad = (pol < rows.indptr[:-1]) | (pol >= rows.indptr[1:])
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
@@ -682,15 +707,7 @@ def _evaluate_post_decision(
 ) -> PolicyEvaluation:
     """Iterative policy evaluation on the post-decision form (actions, not rows)."""
     t0 = time.perf_counter()
-    pol = _check_policy(policy, ps.n_vars)
-    bad = (pol < 0) | (pol >= mdp.n_actions)
-    if bad.any():
-        x = int(np.flatnonzero(bad)[0])
-        raise ValidationError(f"policy[{x}] = {int(pol[x])} is not an action index")
-    ok = mdp.allowed[np.arange(ps.n_vars), pol]
-    if not ok.all():
-        x = int(np.flatnonzero(~ok)[0])
-        raise ValidationError(f"policy[{x}] = {int(pol[x])} is not allowed in state {x}")
+    pol = _check_policy(policy, ps.n_vars, mdp)
     act = pol.astype(np.int8)
     v, sweeps = _evaluate_iterative(ps, act, tol, 1_000_000)
     out = np.empty_like(v)

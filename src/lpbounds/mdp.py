@@ -433,7 +433,12 @@ class FiniteMDP:
     def _expected_rewards(
         cls, R: Any, mats: list[sp.csr_matrix], n: int, n_actions: int
     ) -> np.ndarray:
-        if not sp.issparse(R) and not isinstance(R, (list, tuple)):
+        matrices = sp.issparse(R) or (
+            isinstance(R, (list, tuple))
+            and len(R) > 0
+            and (sp.issparse(R[0]) or np.ndim(R[0]) == 2)
+        )
+        if not matrices:  # a plain list of numbers is a vector, not A matrices
             arr = as_float_array("R", R, finite=False)
             if arr.shape == (n,):
                 return np.repeat(arr[:, None], n_actions, axis=1)
