@@ -1,19 +1,37 @@
-"""lpbounds.verify and ``lpbounds verify``: records, their honesty, and the exit status."""
+"""lpbounds.verify and ``lpbounds verify``: three-valued verdicts from certified intervals."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
 import pytest
+import scipy.optimize as so
 
 import lpbounds as lb
 import lpbounds.verify as verify
+from lpbounds.checks import compare_at_least, compare_equal
 from lpbounds.cli.main import main
 from lpbounds.errors import SolverNotInstalledError, ValidationError
-from lpbounds.formulations import RLP
+from lpbounds.formulations import RLP, SLP
+from lpbounds.rows import BellmanRows
+from lpbounds.status import Verdict
 
-KEYS = {"check", "instance", "solver", "max_deviation", "tolerance", "pass", "detail"}
+KEYS = {
+    "check",
+    "claim",
+    "instance",
+    "solver",
+    "verdict",
+    "width",
+    "deviation",
+    "accuracy",
+    "index",
+    "lp_interval",
+    "exact_interval",
+    "detail",
+}
 CHECKS = {"Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2"}
 
 TINY_TOML = """
@@ -45,44 +63,192 @@ def tiny_instance():
     return verify.VerifyInstance("tiny", mdp, lb.random_partition(16, 4, seed=2))
 
 
-def test_records_of_one_instance(tiny_instance):
-    recs = verify.verify_instance(tiny_instance, ["HIGHS", "CLARABEL"], n_costs=2)
+def _by_claim(recs, check, claim, solver):
+    out = [r for r in recs if (r["check"], r["claim"], r["solver"]) == (check, claim, solver)]
+    assert len(out) == 1, (check, claim, solver, [(r["check"], r["claim"]) for r in recs])
+    return out[0]
+
+
+class ShiftedRLP(RLP):
+    """A wrong RLP: every reward 0.05 too large (its optimum is v* + 0.05/(1-lambda))."""
+
+    def __init__(self, mdp, partition, cost=None):
+        r = BellmanRows.aggregate(mdp, partition, reduce="max")
+        rows = BellmanRows.from_arrays(
+            r.owner, r.action, r.reward + 0.05, r.targets, r.probs, r.discount, r.n_vars
+        )
+        super().__init__(mdp, partition, cost, rows=rows)
+
+
+# ---------------------------------------------------------------------- the comparisons
+def test_equality_verdicts_by_hand():
+    assert compare_equal([1.0], [1.1], [1.05], [1.2], 0.5).verdict is Verdict.HOLDS
+    inc = compare_equal([1.0], [1.1], [1.05], [1.2], 0.1)
+    assert inc.verdict is Verdict.INCONCLUSIVE and inc.width == pytest.approx(0.2)
+    bad = compare_equal([0.0, 1.0], [0.1, 1.1], [0.0, 1.2], [0.1, 1.3], 10.0)
+    assert bad.verdict is Verdict.VIOLATED, "disjoint at entry 1, whatever the accuracy"
+    assert bad.index == 1 and bad.a_interval == (1.0, 1.1) and bad.b_interval == (1.2, 1.3)
+    assert compare_equal([np.nan], [1.0], [0.0], [1.0], 1e9).verdict is Verdict.INCONCLUSIVE
+
+
+def test_inequality_verdicts_by_hand():
+    # a >= b proven (a_lo >= b_hi) holds whatever the widths
+    assert compare_at_least([2.0], [9.0], [0.0], [1.0], 1e-9).verdict is Verdict.HOLDS
+    assert compare_at_least([0.5], [2.0], [0.0], [1.0], 0.6).verdict is Verdict.HOLDS
+    assert compare_at_least([0.5], [2.0], [0.0], [1.0], 0.1).verdict is Verdict.INCONCLUSIVE
+    bad = compare_at_least([0.0, 0.0], [1.0, 0.4], [0.0, 0.5], [1.0, 0.6], 1.0)
+    assert bad.verdict is Verdict.VIOLATED and bad.index == 1
+
+
+# ---------------------------------------------------------------------- one instance
+@pytest.fixture(scope="module")
+def normal_records(tiny_instance):
+    return verify.verify_instance(tiny_instance, ["HIGHS", "CLARABEL"], n_costs=2)
+
+
+def test_normal_run_all_holds(normal_records):
+    recs = normal_records
     assert all(set(r) == KEYS for r in recs)
     assert {r["check"] for r in recs} == CHECKS
     assert {r["solver"] for r in recs} == {"exact", "HIGHS", "CLARABEL", "all"}
     for r in recs:
-        assert r["pass"], r
-        assert r["tolerance"] > 0 and np.isfinite(r["max_deviation"])
-        assert r["pass"] == (r["max_deviation"] <= r["tolerance"])
+        assert r["verdict"] == "holds", r
+        assert 0 <= r["width"] <= r["accuracy"], r
     json.dumps(recs)  # plain types only
 
 
-def test_a_wrong_optimum_is_caught(tiny_instance, monkeypatch):
-    """An RLP whose solver answer is off by 1e-3 must fail Theorem 1 (and nothing else may
-    hide it)."""
+def test_intervals_contain_an_independent_v_star(tiny_instance, normal_records):
+    """The exact side is V*/v* by value iteration from lpbounds; a policy-iteration solve
+    must fall inside the reported exact interval of the per-entry claims."""
+    vstar = lb.solve_exact(tiny_instance.mdp, method="pi").values
+    r = _by_claim(normal_records, "Lemma 1", "optimum = exact (c > 0)", "HIGHS")
+    lo, hi = r["exact_interval"]
+    assert lo <= vstar[r["index"]] <= hi
 
-    class Shifted(RLP):
-        def solve(self, *args, **kwargs):
-            res = super().solve(*args, **kwargs)
-            res.values = res.values + 1e-3
-            return res
 
-    monkeypatch.setattr(verify, "RLP", Shifted)
+def test_a_wrong_lp_is_violated(tiny_instance, monkeypatch):
+    monkeypatch.setattr(verify, "RLP", ShiftedRLP)
     recs = verify.verify_instance(tiny_instance, ["HIGHS"], n_costs=1)
-    failed = {(r["check"], r["detail"].split(":")[0]) for r in recs if not r["pass"]}
-    assert ("Theorem 1", "RLP optimum = v* for 1 costs (0 with zeros)") in failed
-    bad = [r for r in recs if r["check"] == "Theorem 1" and r["solver"] == "HIGHS"]
-    assert any(abs(r["max_deviation"] - 1e-3) < 1e-6 for r in bad)
+    r = _by_claim(recs, "Theorem 1", "optimum = exact (c > 0)", "HIGHS")
+    assert r["verdict"] == "violated", r
+    lo, hi = r["lp_interval"]
+    elo, ehi = r["exact_interval"]
+    assert lo > ehi, "the counterexample's intervals are disjoint"
+    shift = 0.05 / (1 - tiny_instance.mdp.discount)  # the wrong LP's optimum is v* + shift
+    assert lo <= ehi + shift and elo + shift <= hi, "the wrong LP's optimum is inside"
+    assert _by_claim(recs, "Theorem 1", "optimal value = c'(exact)", "HIGHS")["verdict"] == (
+        "violated"
+    )
+    # claims that do not involve RLP are untouched
+    assert _by_claim(recs, "Lemma 1", "optimum = exact (c > 0)", "HIGHS")["verdict"] == "holds"
 
 
-def test_remark_2_records():
+def test_a_perturbed_slp_dual_is_violated(tiny_instance, monkeypatch):
+    """An SLP that does not use the duals it is given (mu-bar plus a uniform weight):
+    its optimum is provably below Lemma 2's prediction from the true mu-bar."""
+
+    class WrongSLP(SLP):
+        def __init__(self, mdp, partition, mu, cost=None):
+            super().__init__(mdp, partition, np.where(mdp.allowed, mu + 1.0, 0.0), cost)
+
+    monkeypatch.setattr(verify, "SLP", WrongSLP)
+    recs = verify.verify_instance(tiny_instance, ["HIGHS"], n_costs=1)
+    r = _by_claim(recs, "Lemma 2", "SLP(mu-bar) = v*", "HIGHS")
+    assert r["verdict"] == "violated", r
+    # the independent value of the perturbed SLP (its fixed point by policy iteration)
+    mdp, part = tiny_instance.mdp, tiny_instance.partition
+    cost = verify._references(tiny_instance, 1, 0, 1e-6).costs[0]  # the check's first cost
+    mu = RLP(mdp, part, cost).solve("HIGHS").mu
+    w = lb.solve_exact(WrongSLP(mdp, part, mu).reduced_mdp(), method="pi").values
+    lo, hi = r["lp_interval"]
+    assert lo <= w[r["index"]] <= hi
+    assert hi < r["exact_interval"][0]
+
+
+def test_an_injected_wrong_bracket_is_violated(tiny_instance):
+    """A result whose certified fields are wrong (shifted by 0.1) is caught by the check."""
+    mdp, part = tiny_instance.mdp, tiny_instance.partition
+    refs = verify._references(tiny_instance, 1, 0, 1e-6)
+    cbar = np.bincount(part.labels, weights=refs.costs[0], minlength=part.n_partitions)
+    form = RLP(mdp, part, refs.costs[0])
+    res = form.solve("HIGHS")
+    fake = dataclasses.replace(
+        res,
+        certificate=None,
+        lower_values=res.lower_values + 0.1,
+        upper_values=res.upper_values + 0.1,
+    )
+    _, entry, _ = verify._optimum_claims(form, fake, cbar, refs.v_lo, refs.v_hi, refs.accuracy)
+    assert entry is not None and entry.verdict is Verdict.VIOLATED
+    _, entry, _ = verify._optimum_claims(form, res, cbar, refs.v_lo, refs.v_hi, refs.accuracy)
+    assert entry.verdict is Verdict.HOLDS
+
+
+def test_an_inaccurate_point_is_inconclusive(tiny_instance):
+    """A point with a large residual has a wide (valid) bracket: inconclusive, not violated."""
+    mdp, part = tiny_instance.mdp, tiny_instance.partition
+    refs = verify._references(tiny_instance, 1, 0, 1e-6)
+    cbar = np.bincount(part.labels, weights=refs.costs[0], minlength=part.n_partitions)
+    form = RLP(mdp, part, refs.costs[0])
+    res = form.solve("HIGHS")
+    noise = np.random.default_rng(0).uniform(-1e-3, 1e-3, res.x.shape)
+    fake = dataclasses.replace(
+        res, x=res.x + noise, certificate=None, lower_values=None, upper_values=None
+    )
+    obj, entry, _ = verify._optimum_claims(form, fake, cbar, refs.v_lo, refs.v_hi, refs.accuracy)
+    assert entry.verdict is Verdict.INCONCLUSIVE and entry.width > refs.accuracy
+    assert obj.verdict is not Verdict.VIOLATED
+
+
+def test_a_loose_first_order_solver_is_never_violated(tiny_instance, monkeypatch):
+    """SCS with eps 1e-3: some claims inconclusive, none violated."""
+    real = verify._solve
+
+    def loose(form, solver):
+        try:
+            return form.solve(solver, raise_on_failure=False, eps_abs=1e-3, eps_rel=1e-3), ""
+        except lb.errors.LPBoundsError:
+            return real(form, solver)
+
+    monkeypatch.setattr(verify, "_solve", loose)
+    recs = verify.verify_instance(tiny_instance, ["SCS"], n_costs=2)
+    verdicts = {r["verdict"] for r in recs if r["solver"] == "SCS"}
+    assert "violated" not in verdicts
+    assert "inconclusive" in verdicts, [(r["claim"], r["width"]) for r in recs]
+
+
+# ---------------------------------------------------------------------- Remark 2
+def test_remark_2_is_a_certified_difference():
     recs = verify.verify_remark2(["HIGHS", "SCIPY"])
     assert [r["solver"] for r in recs] == ["HIGHS", "SCIPY"]
     for r in recs:
-        assert r["check"] == "Remark 2" and r["pass"]
-        assert r["max_deviation"] > r["tolerance"], "the cost dependence must be shown"
+        assert r["check"] == "Remark 2" and r["verdict"] == "holds", r
+        assert r["deviation"] > 0, "lo OPT(c1+c2) - hi OPT(c1) - hi OPT(c2) must be positive"
 
 
+def test_alp_value_bracket_contains_an_independent_optimum():
+    ex = lb.formulations.find_cost_dependent_alp(0)
+    res = lb.formulations.alp.ALP(ex.mdp, ex.basis, ex.cost1).solve("CLARABEL")
+    lo, hi = verify.alp_value_bracket(ex.mdp, ex.basis, ex.cost1, res)
+    # the same ALP built with loops and solved by scipy's HiGHS interface
+    mdp, phi = ex.mdp, np.asarray(ex.basis)
+    probs = mdp.probabilities_full()
+    a_ub, b_ub = [], []
+    for x in range(mdp.n_states):
+        for u in range(mdp.n_actions):
+            if mdp.allowed[x, u]:
+                row = phi[x].copy()
+                for k in range(mdp.n_outcomes):
+                    row -= mdp.discount * probs[x, u, k] * phi[mdp.successors[x, u, k]]
+                a_ub.append(-row)
+                b_ub.append(-mdp.rewards[x, u])
+    ref = so.linprog(phi.T @ ex.cost1, A_ub=a_ub, b_ub=b_ub, bounds=(None, None))
+    assert ref.status == 0
+    assert float(lo) - 1e-9 <= ref.fun <= float(hi) + 1e-9
+    assert float(hi - lo) < 1e-5
+
+
+# ---------------------------------------------------------------------- helpers
 def test_random_instances_are_seeded_and_valid():
     a = verify.random_instances(3, seed=4)
     b = verify.random_instances(3, seed=4)
@@ -100,6 +266,8 @@ def test_default_solvers_and_bad_inputs(tiny_instance):
         verify.verify_instance(tiny_instance, ["NOPE"])
     with pytest.raises(ValidationError, match="n_costs"):
         verify.verify_instance(tiny_instance, ["HIGHS"], n_costs=0)
+    with pytest.raises(ValidationError, match="rtol"):
+        verify.verify_instance(tiny_instance, ["HIGHS"], rtol=0.0)
 
 
 def test_model_instances_skip_large_models():
@@ -108,73 +276,62 @@ def test_model_instances_skip_large_models():
     assert all(i.mdp.n_states <= 1000 for i in insts)
 
 
+def test_summarize_counts_and_keeps_the_worst():
+    def rec(verdict, width):
+        return {"check": "Theorem 1", "solver": "HIGHS", "verdict": verdict, "width": width,
+                "accuracy": 1e-6}  # fmt: skip
+
+    rows = verify.summarize([rec("holds", 1e-9), rec("inconclusive", 1e-5), rec("holds", 5e-7)])
+    assert len(rows) == 1
+    row = rows[0]
+    assert (row["records"], row["holds"], row["inconclusive"], row["violated"]) == (3, 2, 1, 0)
+    assert row["verdict"] == "inconclusive" and row["width"] == 1e-5
+    assert verify.exit_status([rec("inconclusive", 1.0)]) == 0
+    assert verify.exit_status([rec("inconclusive", 1.0)], strict=True) == 1
+    assert verify.exit_status([rec("violated", 0.0)]) == 1
+
+
 # ---------------------------------------------------------------------- the command
-def test_cli_passes_and_writes_json(tiny_model, tmp_path, capsys):
+def test_cli_holds_and_writes_json(tiny_model, tmp_path, capsys):
     out = tmp_path / "records.json"
-    rc = main(["verify", tiny_model, "--random", "0", "--solvers", "HIGHS", "--json", str(out)])
+    argv = ["verify", tiny_model, "--random", "0", "--solvers", "HIGHS", "CLARABEL"]
+    rc = main([*argv, "--json", str(out), "--strict"])
     text = capsys.readouterr().out
     assert rc == 0, text
     recs = json.loads(out.read_text())
-    assert recs and all(set(r) == KEYS and r["pass"] for r in recs)
+    assert recs and all(set(r) == KEYS and r["verdict"] == "holds" for r in recs)
     assert {r["instance"] for r in recs if r["check"] != "Remark 2"} == {"tiny"}
     assert "Remark 2" in {r["check"] for r in recs}
-    assert "checks pass" in text and "Theorem 1" in text
+    assert "0 violated" in text and "holds" in text
 
 
-def test_cli_exits_nonzero_on_a_failed_check(tiny_model, monkeypatch, capsys):
-    class Broken(RLP):
-        def solve(self, *args, **kwargs):
-            res = super().solve(*args, **kwargs)
-            res.values = res.values - 1e-2  # below v*: violates Theorem 1's domination
-            return res
-
-    monkeypatch.setattr(verify, "RLP", Broken)
+def test_cli_exits_1_on_a_violated_claim(tiny_model, monkeypatch, capsys):
+    monkeypatch.setattr(verify, "RLP", ShiftedRLP)
     rc = main(["verify", tiny_model, "--random", "0", "--solvers", "HIGHS"])
     assert rc == 1
-    assert "NO" in capsys.readouterr().out
+    assert "violated" in capsys.readouterr().out
+
+
+def test_cli_strict_fails_on_inconclusive(tiny_model, monkeypatch, capsys):
+    real = verify._solve
+
+    def noisy(form, solver):  # every RLP point 1e-3 off: valid but wide brackets
+        res, msg = real(form, solver)
+        if res is not None and res.formulation == "RLP":
+            res = dataclasses.replace(
+                res, x=res.x + 1e-3, certificate=None, lower_values=None, upper_values=None
+            )
+        return res, msg
+
+    monkeypatch.setattr(verify, "_solve", noisy)
+    argv = ["verify", tiny_model, "--random", "0", "--solvers", "HIGHS"]
+    assert main(argv) == 0
+    assert "inconclusive" in capsys.readouterr().out
+    assert main([*argv, "--strict"]) == 1
 
 
 def test_cli_unknown_solver(tiny_model, capsys):
     rc = main(["verify", tiny_model, "--random", "0", "--solvers", "NOPE"])
-    assert rc == 1
-    assert "unknown solver" in capsys.readouterr().err
-
-
-def test_summarize_keeps_the_worst_record():
-    recs = [
-        {
-            "check": "Theorem 1",
-            "solver": "HIGHS",
-            "max_deviation": 1e-9,
-            "tolerance": 1e-6,
-            "pass": True,
-        },
-        {
-            "check": "Theorem 1",
-            "solver": "HIGHS",
-            "max_deviation": 2e-6,
-            "tolerance": 1e-6,
-            "pass": False,
-        },
-        {
-            "check": "Remark 2",
-            "solver": "HIGHS",
-            "max_deviation": 0.5,
-            "tolerance": 1e-6,
-            "pass": True,
-        },
-        {
-            "check": "Remark 2",
-            "solver": "HIGHS",
-            "max_deviation": 0.1,
-            "tolerance": 1e-6,
-            "pass": True,
-        },
-    ]
-    rows = verify.summarize(recs)
-    assert [(r["check"], r["records"], r["passed"]) for r in rows] == [
-        ("Theorem 1", 2, 1),
-        ("Remark 2", 2, 2),
-    ]
-    assert rows[0]["max_deviation"] == 2e-6, "the worst ratio, not the first record"
-    assert rows[1]["max_deviation"] == 0.1, "Remark 2: the smallest shown difference"
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert "unknown solver" in err and len(err.strip().splitlines()) == 1

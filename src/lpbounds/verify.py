@@ -1,60 +1,90 @@
-r"""Empirical verification of the paper's LP results, solver by solver, against exact values.
+r"""Theorem verdicts: the paper's LP results checked solver by solver with certified intervals.
 
-Every function returns *records*: dicts with the keys
+Every check compares two **certified intervals**, never a point against a tolerance:
 
-``check``
-    The paper's name of the result: "Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2",
-    "Remark 2".
-``instance``, ``solver``
-    The model and the LP solver ("exact" for solver-free checks, "all" for
-    comparisons across solvers).
-``max_deviation``, ``tolerance``, ``pass``
-    The measured quantity (absolute, in value units), the absolute tolerance it was
-    compared with, and ``max_deviation <= tolerance`` (for "Remark 2", where a
-    *difference* is to be shown, ``pass`` is ``max_deviation > tolerance``).
-``detail``
-    What was measured, in one line.
+* the LP side: the bracket ``lower <= exact optimum <= upper`` that lpbounds certifies from
+  the returned point alone (:func:`lpbounds.checks.lp_bracket`, the result's
+  ``certificate``; the contraction argument of :mod:`lpbounds.certificate`), or the
+  bracket on the LP's optimal objective (:func:`lpbounds.checks.lp_objective_bracket`:
+  a certified feasible point above, weak duality below);
+* the exact side: ``[values - error_bound, values + error_bound]`` of the fixed points of
+  :func:`lpbounds.dp.solve_exact` (``V*``, RLP's ``v*``).
 
-The references are exact: ``V*`` and RLP's ``v*`` are fixed points computed by
-:func:`lpbounds.dp.solve_exact` to a residual ``1e-10 * max|R| / (1 - lambda)``, never
-an LP solution. LP tolerances are ``LP_COMPARE_RTOL * max(1, max|reference|)``
-(:mod:`lpbounds.tolerances`), far above the DP error and above the accuracy of interior
-point solvers (Clarabel stops near 1e-8 relative).
+Each record has a :class:`~lpbounds.status.Verdict`:
 
-What each check measures (``c`` are ``n_costs`` random non-negative costs: the first
-strictly positive, the others with zeros):
+``holds``
+    The intervals are consistent with the claim and narrow enough: the largest
+    difference they allow is within the requested accuracy ``rtol * max|R| / (1 -
+    lambda)`` (times ``sum c`` for objectives).
+``violated``
+    The intervals *prove* the claim false: for an equality, some entry's intervals are
+    disjoint; for ``a >= b``, some entry has ``a_hi < b_lo``. The record names the entry
+    (``index``) and both intervals (``lp_interval``, ``exact_interval``): a counterexample.
+``inconclusive``
+    Neither: the solver was not accurate enough to decide (the widths are shown).
 
-* **Lemma 1** - ELP's optimum is ``V*``: for ``c > 0`` the LP point equals ``V*``; where
-  ``c`` has zeros the minimiser is not unique, so the check is that the point
-  dominates ``V*`` and equals it wherever ``c(x) > 0`` (``c'V = c'V*`` with ``V >= V*``
-  forces that). Solver "exact": ``Phi v* >= V*`` (RLP's bound).
-* **Theorem 1** - RLP's optimum is ``v*`` for every cost (same measure as Lemma 1, on
-  partitions), across solvers ("all": largest difference between two solvers'
-  optima), and every feasible point found dominates ``v*`` (the LP optima for every
-  cost, and, solver "exact", the value-iteration iterates ``T^k u`` from the feasible
-  constant ``u = max R / (1 - lambda)``, all of which are feasible).
-* **Lemma 2** - with each solver's own optimal duals ``mu-bar`` (they differ between
-  solvers; the detail reports by how much), ``SLP(mu-bar)`` solved by that solver has
-  the optimum ``v*``, and the reduced MDP of step 2 of Theorem 1's proof has the value
-  ``v*`` (exact DP).
-* **Theorem 2** - IB for ``L = 1..5``: every block of the LP optimum equals ``v*``
-  (``>= v*`` is the theorem, equality is Lemma 1 for IB); solver "exact": the fixed
-  point of IB's cyclic rows is ``(v*, ..., v*)``. LLP (surplus lifting) with random
-  ``d >= 0``: the optimal ``v`` dominates ``v*``.
+A solver's inaccuracy therefore never reads as a broken theorem: an inaccurate point has
+a wide (still valid) bracket, which gives *inconclusive*, not *violated*.
+
+Record keys: ``check`` (the paper's result), ``claim`` (what was compared), ``instance``,
+``solver`` ("exact" for solver-free checks, "all" across solvers), ``verdict``, ``width``,
+``deviation`` (distance of the interval midpoints), ``accuracy``, ``index``,
+``lp_interval``, ``exact_interval``, ``detail``.
+
+The claims (``c`` are ``n_costs`` random non-negative costs: the first strictly positive,
+the others with zeros):
+
+* **Lemma 1** - ELP's optimum is ``V*``: per entry for ``c > 0`` (the unique optimum),
+  and the optimal objective ``c'V*`` for every cost (with zeros in ``c`` the minimiser is
+  not unique and an interior point solver returns a point far from ``V*`` where ``c = 0``;
+  the optimal *value* is still ``c'V*``). Solver "exact": ``Phi v* >= V*``.
+* **Theorem 1** - RLP's optimum is ``v*`` for every cost (as Lemma 1); the certified
+  feasible point of every solve (the certificate's ``upper``) dominates ``v*``, and so do
+  the value-iteration iterates ``T^k u`` (solver "exact", certified the same way); the
+  brackets of all solvers agree (solver "all").
+* **Lemma 2** - ``SLP(mu-bar)`` with each solver's own RLP duals ``y`` (spread to pairs,
+  ``mu-bar``) has the optimum ``v*``, and so has the reduced MDP of step 2 (exact DP).
+  Solver duals are never exactly optimal, so the claim checked is the lemma's proof made
+  quantitative (:func:`lemma2_slack`): with ``eps' = y'(A v* - b) >= 0`` (complementary
+  slackness, 0 for optimal duals) and the dual residual ``r = A'y - c-bar``, every
+  partition ``i`` has an action ``u`` whose surrogate row is slack by at most
+  ``sigma_i = eps' n_A / (c-bar(i) - |r_i|)`` at ``v*``, so ``v* - sigma/(1-kappa) <=
+  SLP(mu-bar) <= v*``. Optimal duals give ``sigma = 0``: Lemma 2 itself; inaccurate
+  duals widen the predicted interval (inconclusive), they cannot produce *violated*.
+* **Theorem 2** - IB for ``L = 1..5``: every block of the LP optimum equals ``v*`` (the
+  certified feasible point dominates ``v*``: the theorem; equality: Lemma 1 for IB);
+  solver "exact": the fixed point of IB's cyclic rows is ``(v*, ..., v*)``. LLP (surplus
+  lifting) with random ``d >= 0``: its certified feasible ``v`` dominates ``v*``.
 * **Remark 2** - :func:`~lpbounds.formulations.alp.find_cost_dependent_alp` finds a small
-  MDP and soft-aggregation basis on which the optimum for ``c2`` is worse than the
-  optimum for ``c1`` under ``c1`` (so the optimal sets differ); each solver re-solves it.
+  MDP and soft-aggregation basis; each solver's answers for ``c1``, ``c2`` and ``c1 + c2``
+  are turned into *exact* rational brackets on the three optimal values
+  (:func:`alp_value_bracket`), and the dependence on the cost is a certified difference:
+  if one point were optimal for both ``c1`` and ``c2``, then ``OPT(c1 + c2) = OPT(c1) +
+  OPT(c2)`` (in general ``>=``), so ``lower(OPT(c1 + c2)) > upper(OPT(c1)) +
+  upper(OPT(c2))`` proves that the optimum depends on the cost (*holds*); otherwise
+  *inconclusive* (never *violated*: a failure to show a difference proves nothing).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .certificate import contraction_modulus, objective_bracket
+from .checks import (
+    Comparison,
+    combine,
+    compare_at_least,
+    compare_equal,
+    dp_interval,
+    lp_bracket,
+    lp_objective_bracket,
+)
 from .dp import solve_exact
 from .errors import LPBoundsError, ValidationError
 from .formulations import (
@@ -74,12 +104,16 @@ from .instances import load_instance, models_dir
 from .mdp import FiniteMDP
 from .partition import Partition
 from .rows import BellmanRows
-from .tolerances import LP_COMPARE_RTOL
+from .status import Verdict
+from .tolerances import LP_COMPARE_RTOL, dp_scale
 
 __all__ = [
     "RELIABLE_LP_SOLVERS",
     "VerifyInstance",
+    "alp_value_bracket",
     "default_solvers",
+    "exit_status",
+    "lemma2_slack",
     "model_instances",
     "random_instances",
     "run_verification",
@@ -91,9 +125,10 @@ __all__ = [
 Record = dict[str, Any]
 Progress = Callable[[str], None]
 
-#: Solvers whose LP optima are accurate to ``LP_COMPARE_RTOL`` out of the box: the
-#: default set of :func:`run_verification` (those installed). First-order methods (SCS,
-#: OSQP, PDLP) stop near 1e-4 relative and are checked only when named.
+#: The default set of :func:`run_verification` (those installed): solvers that usually
+#: reach ``LP_COMPARE_RTOL`` at their defaults, so that the verdicts are mostly *holds*.
+#: Any installed LP solver may be named: a less accurate one (SCS, OSQP, PDLP) gives
+#: *inconclusive* verdicts, never *violated* ones.
 RELIABLE_LP_SOLVERS: tuple[str, ...] = (
     "HIGHS",
     "CLARABEL",
@@ -198,27 +233,33 @@ def _estimated_states(inst: Any) -> int | None:
     return None
 
 
+_EPS = float(np.finfo(np.float64).eps)
+
+
 def _record(
-    check: str,
-    instance: str,
-    solver: str,
-    deviation: float,
-    tolerance: float,
-    detail: str,
-    *,
-    larger_passes: bool = False,
+    check: str, claim: str, instance: str, solver: str, cmp: Comparison, detail: str = ""
 ) -> Record:
-    dev = float(deviation)
-    ok = dev > tolerance if larger_passes else dev <= tolerance
+    """A JSON-able record of one verdict."""
     return {
         "check": check,
+        "claim": claim,
         "instance": instance,
         "solver": solver,
-        "max_deviation": dev,
-        "tolerance": float(tolerance),
-        "pass": bool(ok and np.isfinite(dev)),
+        "verdict": cmp.verdict.value,
+        "width": cmp.width,
+        "deviation": cmp.deviation,
+        "accuracy": cmp.accuracy,
+        "index": cmp.index,
+        "lp_interval": list(cmp.a_interval),
+        "exact_interval": list(cmp.b_interval),
         "detail": detail,
     }
+
+
+def _no_point(accuracy: float) -> Comparison:
+    """The verdict when a solve returned no point: nothing is certified, so inconclusive."""
+    inf = float("inf")
+    return Comparison(Verdict.INCONCLUSIVE, inf, inf, accuracy, 0, (-inf, inf), (-inf, inf))
 
 
 def _random_costs(n: int, k: int, rng: np.random.Generator) -> list[np.ndarray]:
@@ -233,20 +274,328 @@ def _random_costs(n: int, k: int, rng: np.random.Generator) -> list[np.ndarray]:
     return costs
 
 
-def _cost_deviation(v: np.ndarray, ref: np.ndarray, weight: np.ndarray) -> float:
-    """``max( max_{weight > 0} |v - ref|, max (ref - v)^+ )``: equality where the cost is
-    positive (forced by ``c'v = c'ref`` and ``v >= ref``), domination everywhere."""
-    pos = weight > 0
-    eq = float(np.abs(v[pos] - ref[pos]).max(initial=0.0))
-    dom = float(np.maximum(ref - v, 0.0).max(initial=0.0))
-    return max(eq, dom)
-
-
 def _solve(form: Any, solver: str) -> tuple[LPResult | None, str]:
+    """The result if the solver returned a point (whatever its status), else a message."""
     try:
-        return form.solve(solver), ""
+        res = form.solve(solver, raise_on_failure=False)
     except LPBoundsError as exc:
         return None, f"solve failed: {exc}"
+    if not np.all(np.isfinite(res.x)):
+        return None, f"no point: status {res.status} ({res.extra.get('message', '')})"
+    return res, ""
+
+
+@dataclass
+class _Refs:
+    """The exact side of one instance: ``V*`` and ``v*`` as certified intervals."""
+
+    vfull_lo: np.ndarray
+    vfull_hi: np.ndarray
+    v_lo: np.ndarray
+    v_hi: np.ndarray
+    rlp_rows: BellmanRows
+    accuracy: float
+    costs: list[np.ndarray]
+    d_list: list[np.ndarray]
+
+
+def _references(inst: VerifyInstance, n_costs: int, seed: int, rtol: float) -> _Refs:
+    mdp, part = inst.mdp, inst.partition
+    rng = np.random.default_rng([seed, mdp.n_states, part.n_partitions])
+    vfull_lo, vfull_hi = dp_interval(solve_exact(mdp))
+    rlp_rows = BellmanRows.aggregate(mdp, part, reduce="max")
+    v_lo, v_hi = dp_interval(solve_exact(rlp_rows))
+    costs = _random_costs(mdp.n_states, n_costs, rng)
+    # LLP's surplus costs: one dense, one with about half zeros
+    d_list = [rng.uniform(0.0, 1.0, (mdp.n_states, mdp.n_actions)) for _ in range(2)]
+    d_list[1][rng.random(d_list[1].shape) < 0.5] = 0.0
+    scale = dp_scale(float(np.abs(mdp.rewards[mdp.allowed]).max(initial=0.0)), mdp.discount)
+    return _Refs(vfull_lo, vfull_hi, v_lo, v_hi, rlp_rows, rtol * scale, costs, d_list)
+
+
+def _optimum_claims(
+    form: Any, res: LPResult, cost: np.ndarray, ref_lo: np.ndarray, ref_hi: np.ndarray, acc: float
+) -> tuple[Comparison, Comparison | None, np.ndarray]:
+    """``(objective verdict, per-entry verdict or None, certified feasible point)`` of the
+    claim "this LP's optimum is the reference" (per entry only when ``cost > 0``: the
+    optimum is unique only then)."""
+    br = lp_bracket(form, res)
+    lo, hi = lp_objective_bracket(form, res, br)
+    rlo, rhi = objective_bracket(cost, ref_lo, ref_hi)
+    obj = compare_equal(lo, hi, rlo, rhi, acc * float(cost.sum()))
+    entry = compare_equal(br.lower, br.upper, ref_lo, ref_hi, acc) if np.all(cost > 0) else None
+    return obj, entry, br.upper
+
+
+# ---------------------------------------------------------------------- solver-free checks
+def _exact_checks(inst: VerifyInstance, refs: _Refs) -> list[Record]:
+    """Phi v* >= V*; every VI iterate from a feasible start dominates v*; IB's fixed point."""
+    from .certificate import certify
+
+    mdp, part, name, acc = inst.mdp, inst.partition, inst.name, refs.accuracy
+    out = [
+        _record(
+            "Lemma 1",
+            "Phi v* >= V*",
+            name,
+            "exact",
+            compare_at_least(
+                part.lift(refs.v_lo), part.lift(refs.v_hi), refs.vfull_lo, refs.vfull_hi, acc
+            ),
+            "RLP's bound dominates the exact value (both exact DP)",
+        )
+    ]
+    u = np.full(part.n_partitions, float(refs.rlp_rows.reward.max()) / (1.0 - mdp.discount))
+    cmps = []
+    for _ in range(50):
+        u, _ = refs.rlp_rows.apply_max(u)
+        feas = certify(refs.rlp_rows, u).upper  # the computed iterate, made certainly feasible
+        cmps.append(compare_at_least(feas, feas, refs.v_lo, refs.v_hi, acc))
+    out.append(
+        _record(
+            "Theorem 1",
+            "feasible points >= v*",
+            name,
+            "exact",
+            combine(cmps),
+            "50 iterates T^k(max R/(1-lambda)), each certified feasible",
+        )
+    )
+    cmps = []
+    for L in IB_BLOCKS:
+        lo, hi = dp_interval(solve_exact(IB(mdp, part, L).rows))
+        cmps.append(compare_equal(lo, hi, np.tile(refs.v_lo, L), np.tile(refs.v_hi, L), acc))
+    out.append(
+        _record(
+            "Theorem 2",
+            "fixed point of IB = (v*, ..., v*)",
+            name,
+            "exact",
+            combine(cmps),
+            f"IB's cyclic rows, L = {IB_BLOCKS[0]}..{IB_BLOCKS[-1]} (exact DP)",
+        )
+    )
+    return out
+
+
+# ---------------------------------------------------------------------- per solver
+def _cost_claims(
+    check: str,
+    name: str,
+    solver: str,
+    forms: list[tuple[Any, np.ndarray]],
+    ref_lo: np.ndarray,
+    ref_hi: np.ndarray,
+    acc: float,
+) -> tuple[list[Record], list[Comparison], LPResult | None]:
+    """Objective and per-entry verdicts over the costs, the domination comparisons of the
+    certified feasible points, and the first cost's result (for Lemma 2)."""
+    objs, entries, doms, fail, first = [], [], [], "", None
+    for k, (form, cost) in enumerate(forms):
+        res, msg = _solve(form, solver)
+        if res is None:
+            objs.append(_no_point(acc))
+            entries.append(_no_point(acc))
+            doms.append(_no_point(acc))
+            fail = msg
+            continue
+        first = res if k == 0 else first
+        obj, entry, feas = _optimum_claims(form, res, cost, ref_lo, ref_hi, acc)
+        objs.append(obj)
+        if entry is not None:
+            entries.append(entry)
+        doms.append(compare_at_least(feas, feas, ref_lo, ref_hi, acc))
+    n = len(forms)
+    recs = [
+        _record(
+            check,
+            "optimal value = c'(exact)",
+            name,
+            solver,
+            combine(objs),
+            fail or f"{n} costs ({n - 1} with zeros); objective bracket vs exact",
+        )
+    ]
+    if entries:
+        recs.append(
+            _record(
+                check,
+                "optimum = exact (c > 0)",
+                name,
+                solver,
+                combine(entries),
+                fail or "per entry, strictly positive cost (unique optimum)",
+            )
+        )
+    return recs, doms, first
+
+
+def _lemma2_checks(
+    inst: VerifyInstance, refs: _Refs, solver: str, rlp: Any, rlp_res: LPResult
+) -> list[Record]:
+    """SLP(mu-bar) and the reduced MDP against Lemma 2's predicted interval."""
+    name, acc = inst.name, refs.accuracy
+    try:
+        slp = SLP(inst.mdp, inst.partition, rlp_res.mu)
+    except LPBoundsError as exc:
+        cmp = _no_point(acc)
+        return [_record("Lemma 2", "SLP(mu-bar) = v*", name, solver, cmp, f"SLP failed: {exc}")]
+    sigma = lemma2_slack(rlp, rlp_res, refs.v_lo, refs.v_hi)
+    beta = float(
+        np.nextafter(sigma / (1.0 - contraction_modulus(slp.rows)) * (1 + 4 * _EPS), np.inf)
+    )
+    pred_lo = np.nextafter(refs.v_lo - beta, -np.inf)
+    note = f"predicted [v* - {beta:.2e}, v*] from the duals' certified slack"
+    res, msg = _solve(slp, solver)
+    if res is None:
+        cmp, detail = _no_point(acc), msg
+    else:
+        br = lp_bracket(slp, res)
+        cmp, detail = compare_equal(br.lower, br.upper, pred_lo, refs.v_hi, acc), note
+    red_lo, red_hi = dp_interval(solve_exact(slp.reduced_mdp()))
+    return [
+        _record("Lemma 2", "SLP(mu-bar) = v*", name, solver, cmp, detail),
+        _record(
+            "Lemma 2",
+            "reduced MDP value = v*",
+            name,
+            solver,
+            compare_equal(red_lo, red_hi, pred_lo, refs.v_hi, acc),
+            f"exact DP of step 2's MDP ({int(slp.rows.n_rows)} (i, u) rows); {note}",
+        ),
+    ]
+
+
+def lemma2_slack(rlp: Any, result: LPResult, v_lo: np.ndarray, v_hi: np.ndarray) -> float:
+    r"""Certified upper bound on ``sigma = max_i min_u`` (slack at ``v*`` of ``SLP(mu-bar)``'s
+    row ``(i, u)``) for the pair duals ``mu-bar = result.mu`` of an RLP solve.
+
+    Lemma 2's proof: by complementary slackness an optimal dual puts weight only on rows
+    tight at ``v*``, so every surrogate row is tight and ``SLP(mu-bar) = v*``. For any
+    ``mu >= 0`` the surrogate row ``(i, u)`` is the ``mu``-weighted average of its pairs'
+    RLP rows, so its slack at ``v*`` is ``sum_x mu(x, u) s_(x,u) / Y_iu`` with ``s`` the
+    RLP row slacks (``>= 0``) and ``Y_iu = sum_{x in S_i} mu(x, u)``; the smallest over
+    ``u`` bounds ``(v* - T_mu v*)(i)``, and by the contraction argument SLP's optimum
+    ``w*`` satisfies ``v* - sigma / (1 - kappa) <= w* <= v*`` (``<= v*``: SLP is a
+    relaxation of RLP). Exactly optimal duals give ``sigma = 0``: Lemma 2; a solver's
+    near-optimal duals give a small ``sigma`` (their complementary slackness
+    ``y'(A v* - b)`` is small), inaccurate ones a large one, which widens the predicted
+    interval (*inconclusive*), never a *violated* verdict.
+
+    ``s`` is bounded above from ``[v_lo, v_hi]`` with a rounding allowance of ``2 (L + 3)
+    eps`` times the magnitudes summed (as in :mod:`lpbounds.certificate`), the weighted
+    sums by ``(n + 3) eps`` relative, and ``(L + 4) eps (max|R| + max|v|)`` covers SLP's
+    renormalised probabilities. ``inf`` when the result has no pair duals.
+    """
+    rows = rlp.rows
+    mu = None if result.mu is None else np.asarray(result.mu, dtype=np.float64)
+    if mu is None or rows.pair_row is None or not np.all(np.isfinite(mu)):
+        return float("inf")
+    lam, n_out = rows.discount, rows.n_outcomes
+    probs = np.asarray(rows.probs)
+    t_lo = (probs * v_lo[rows.targets]).sum(axis=1)
+    t_abs = (probs * np.abs(v_lo[rows.targets])).sum(axis=1)
+    own = v_hi[rows.owner]
+    mag = np.abs(rows.reward) + np.abs(own) + lam * t_abs
+    s_hi = np.maximum(own - rows.reward - lam * t_lo + 2 * (n_out + 3) * _EPS * mag, 0.0)
+    part, n_actions = rlp.partition, mu.shape[1]
+    w = np.maximum(mu, 0.0)
+    pair_s = np.where(w > 0, s_hi[np.maximum(rows.pair_row, 0)], 0.0)
+    key = (part.labels[:, None] * n_actions + np.arange(n_actions)).ravel()
+    size = part.n_partitions * n_actions
+    num = np.bincount(key, weights=(w * pair_s).ravel(), minlength=size)
+    den = np.bincount(key, weights=w.ravel(), minlength=size)
+    rel = (mu.shape[0] + 3) * _EPS
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(den > 0, num * (1 + rel) / (den * (1 - rel)), np.inf)
+    sigma = float(ratio.reshape(part.n_partitions, n_actions).min(axis=1).max(initial=0.0))
+    vmax = float(np.maximum(np.abs(v_lo), np.abs(v_hi)).max(initial=0.0))
+    rounding = (n_out + 4) * _EPS * (float(np.abs(rows.reward).max(initial=0.0)) + vmax)
+    return sigma * (1.0 + 4 * _EPS) + rounding
+
+
+def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Record]:
+    """IB: every block = v* (and its certified feasible point >= v*); LLP: v >= v*."""
+    name, acc, mdp, part = inst.name, refs.accuracy, inst.mdp, inst.partition
+    eq, dom, fail = [], [], ""
+    for L in IB_BLOCKS:
+        ib = IB(mdp, part, L)
+        res, msg = _solve(ib, solver)
+        if res is None:
+            eq.append(_no_point(acc))
+            dom.append(_no_point(acc))
+            fail = msg
+            continue
+        br = lp_bracket(ib, res)
+        lo, hi = np.tile(refs.v_lo, L), np.tile(refs.v_hi, L)
+        eq.append(compare_equal(br.lower, br.upper, lo, hi, acc))
+        dom.append(compare_at_least(br.upper, br.upper, lo, hi, acc))
+    span = f"IB L={IB_BLOCKS[0]}..{IB_BLOCKS[-1]}"
+    out = [
+        _record("Theorem 2", "IB blocks = v*", name, solver, combine(eq), fail or span),
+        _record(
+            "Theorem 2",
+            "IB feasible point >= v*",
+            name,
+            solver,
+            combine(dom),
+            fail or f"{span}: certified feasible point, every block",
+        ),
+    ]
+    llp, fail = [], ""
+    for d in refs.d_list:
+        form = LLP(mdp, part, d)
+        res, msg = _solve(form, solver)
+        if res is None:
+            llp.append(_no_point(acc))
+            fail = msg
+            continue
+        feas = lp_bracket(form, _LLPView(res)).upper
+        llp.append(compare_at_least(feas, feas, refs.v_lo, refs.v_hi, acc))
+    out.append(
+        _record(
+            "Theorem 2",
+            "LLP v >= v*",
+            name,
+            solver,
+            combine(llp),
+            fail or f"LLP with {len(refs.d_list)} random d >= 0: certified feasible v",
+        )
+    )
+    return out
+
+
+class _LLPView:
+    """An LLP result seen as a point of RLP's rows (its ``v``): LLP's certificate is on them."""
+
+    def __init__(self, res: LPResult) -> None:
+        self.x = np.asarray(res.values, dtype=np.float64)
+        self.certificate = res.certificate
+        self.lower_values = res.lower_values
+        self.upper_values = res.upper_values
+        self.duals = None
+
+
+def _across_solvers(name: str, firsts: dict[str, tuple[Any, LPResult]], acc: float) -> list[Record]:
+    """The first cost's RLP brackets of every pair of solvers overlap (same optimum)."""
+    if len(firsts) < 2:
+        return []
+    brs = {s: lp_bracket(form, res) for s, (form, res) in firsts.items()}
+    cmps = [
+        compare_equal(a.lower, a.upper, b.lower, b.upper, acc)
+        for i, a in enumerate(brs.values())
+        for b in list(brs.values())[i + 1 :]
+    ]
+    return [
+        _record(
+            "Theorem 1",
+            "RLP optima agree",
+            name,
+            "all",
+            combine(cmps),
+            f"certified brackets of {', '.join(brs)} (first cost)",
+        )
+    ]
 
 
 def verify_instance(
@@ -270,246 +619,222 @@ def verify_instance(
     seed : int
         Seed of the costs and of LLP's ``d``.
     rtol : float
-        Relative tolerance of every LP comparison (see the module docstring).
+        Requested accuracy, relative to ``max|R| / (1 - lambda)``: a claim *holds* when
+        the intervals allow no difference larger than that.
     progress : callable(str), optional
         Called before each solver's checks.
+
+    Returns
+    -------
+    list of dict
+        One record per claim and solver (see the module docstring).
     """
     if n_costs < 1:
         raise ValidationError(f"n_costs must be >= 1; got {n_costs}")
+    if not (np.isfinite(rtol) and rtol > 0):
+        raise ValidationError(f"rtol must be a positive finite number; got {rtol!r}")
     names = [resolve_solver(s) for s in solvers]
     mdp, part, name = inst.mdp, inst.partition, inst.name
-    rng = np.random.default_rng([seed, mdp.n_states, part.n_partitions])
-    exact = solve_exact(mdp)
-    vstar_full = exact.values
-    rlp_rows = BellmanRows.aggregate(mdp, part, reduce="max")
-    rfp = solve_exact(rlp_rows)
-    vstar = rfp.values
-    tol_v = rtol * max(1.0, float(np.abs(vstar_full).max()))
-    tol_p = rtol * max(1.0, float(np.abs(vstar).max()))
-    costs = _random_costs(mdp.n_states, n_costs, rng)
-    # LLP's surplus costs: one dense, one with about half zeros
-    d_list = [rng.uniform(0.0, 1.0, (mdp.n_states, mdp.n_actions)) for _ in range(2)]
-    d_list[1][rng.random(d_list[1].shape) < 0.5] = 0.0
-    records: list[Record] = []
-
-    # ---------------------------------------------------------------- exact checks
-    lift = part.lift(vstar)
-    # exact checks compare two DP results: their error bounds plus round-off
-    dp_err = exact.error_bound + rfp.error_bound + 1e-12 * max(1.0, float(np.abs(lift).max()))
-    fp_err = rfp.error_bound + 1e-12 * max(1.0, float(np.abs(vstar).max()))
-    records.append(
-        _record(
-            "Lemma 1",
-            name,
-            "exact",
-            float(np.maximum(vstar_full - lift, 0.0).max()),
-            dp_err,
-            f"Phi v* >= V* (RLP's bound); min(Phi v* - V*) = {(lift - vstar_full).min():.3g}",
-        )
-    )
-    upper = np.full(part.n_partitions, float(rlp_rows.reward.max()) / (1.0 - mdp.discount))
-    worst, u = 0.0, upper
-    for _ in range(50):
-        u, _ = rlp_rows.apply_max(u)
-        worst = max(worst, float(np.maximum(vstar - u, 0.0).max()))
-    records.append(
-        _record(
-            "Theorem 1",
-            name,
-            "exact",
-            worst,
-            fp_err,
-            "every feasible point found dominates v*: 50 iterates T^k(max R/(1-lambda))",
-        )
-    )
-    ib_dev = 0.0
-    for L in IB_BLOCKS:
-        ib = IB(mdp, part, L)
-        fp = solve_exact(ib.rows).values.reshape(L, -1)
-        ib_dev = max(ib_dev, float(np.abs(fp - vstar).max()))
-    records.append(
-        _record(
-            "Theorem 2",
-            name,
-            "exact",
-            ib_dev,
-            2 * fp_err,
-            f"fixed point of IB's cyclic rows = (v*, ..., v*), L = {IB_BLOCKS[0]}..{IB_BLOCKS[-1]}",
-        )
-    )
-
-    # ---------------------------------------------------------------- per solver
-    first_opt: dict[str, np.ndarray] = {}
-    mus: dict[str, np.ndarray] = {}
+    refs = _references(inst, n_costs, seed, rtol)
+    records = _exact_checks(inst, refs)
+    firsts: dict[str, tuple[Any, LPResult]] = {}
     for solver in names:
         if progress is not None:
             progress(f"{name}: {solver}")
-        # Lemma 1: ELP = V*
-        devs, fail = [], ""
-        for c in costs:
-            res, msg = _solve(ELP(mdp, c), solver)
-            if res is None:
-                devs.append(np.inf)
-                fail = msg
-                continue
-            devs.append(_cost_deviation(res.values, vstar_full, c))
-        records.append(
-            _record(
-                "Lemma 1",
-                name,
-                solver,
-                max(devs),
-                tol_v,
-                fail or f"ELP = V* for {len(costs)} costs ({len(costs) - 1} with zeros)",
-            )
+        elps = [(ELP(mdp, c), c) for c in refs.costs]
+        recs, _, _ = _cost_claims(
+            "Lemma 1", name, solver, elps, refs.vfull_lo, refs.vfull_hi, refs.accuracy
         )
-        # Theorem 1: RLP = v* for every cost; optima dominate v*
-        devs, doms, fail = [], [], ""
-        for k, c in enumerate(costs):
-            res, msg = _solve(RLP(mdp, part, c), solver)
-            if res is None:
-                devs.append(np.inf)
-                doms.append(np.inf)
-                fail = msg
-                continue
-            cbar = np.bincount(part.labels, weights=c, minlength=part.n_partitions)
-            devs.append(_cost_deviation(res.values, vstar, cbar))
-            doms.append(float(np.maximum(vstar - res.values, 0.0).max()))
-            if k == 0:
-                first_opt[solver] = res.values
-                assert res.mu is not None
-                mus[solver] = res.mu
+        records += recs
+        m = part.n_partitions
+        rlps = [
+            (RLP(mdp, part, c), np.bincount(part.labels, weights=c, minlength=m))
+            for c in refs.costs
+        ]
+        recs, doms, first = _cost_claims(
+            "Theorem 1", name, solver, rlps, refs.v_lo, refs.v_hi, refs.accuracy
+        )
+        records += recs
         records.append(
             _record(
                 "Theorem 1",
+                "feasible points >= v*",
                 name,
                 solver,
-                max(devs),
-                tol_p,
-                fail or f"RLP optimum = v* for {len(costs)} costs ({len(costs) - 1} with zeros)",
+                combine(doms),
+                f"certified feasible point of each of the {len(rlps)} RLP solves",
             )
         )
-        records.append(
-            _record(
-                "Theorem 1",
-                name,
-                solver,
-                max(doms),
-                tol_p,
-                fail or f"every feasible point found dominates v*: {len(costs)} LP optima",
-            )
+        if first is not None:
+            firsts[solver] = (rlps[0][0], first)
+            records += _lemma2_checks(inst, refs, solver, rlps[0][0], first)
+        records += _theorem2_checks(inst, refs, solver)
+    return records + _across_solvers(name, firsts, refs.accuracy)
+
+
+# ---------------------------------------------------------------------- Remark 2
+def _exact_alp_data(
+    mdp: FiniteMDP, basis: np.ndarray, cost: np.ndarray
+) -> tuple[list[list[Fraction]], list[Fraction], list[Fraction]]:
+    """``G = (E - lambda P) Phi``, ``b = R`` and ``Phi' c`` in exact rational arithmetic,
+    from the floating-point data taken as exact."""
+    rows = ELP(mdp).rows
+    lam = Fraction(float(rows.discount))
+    phi = [[Fraction(float(t)) for t in row] for row in np.asarray(basis, dtype=np.float64)]
+    n_feat = len(phi[0])
+    probs = np.asarray(rows.probs)
+    g = []
+    for r in range(rows.n_rows):
+        own = phi[int(rows.owner[r])]
+        row = list(own)
+        for t, p in zip(rows.targets[r], probs[r], strict=True):
+            if p != 0.0:
+                fp = lam * Fraction(float(p))
+                row = [row[k] - fp * phi[int(t)][k] for k in range(n_feat)]
+        g.append(row)
+    b = [Fraction(float(t)) for t in rows.reward]
+    cf = [Fraction(float(t)) for t in cost]
+    c_phi = [sum((cf[x] * phi[x][k] for x in range(len(cf))), Fraction(0)) for k in range(n_feat)]
+    return g, b, c_phi
+
+
+def _solve_exact_system(mat: list[list[Fraction]], rhs: list[Fraction]) -> list[Fraction] | None:
+    """Gauss-Jordan elimination in rationals; None if singular."""
+    n = len(rhs)
+    aug = [[*list(mat[i]), rhs[i]] for i in range(n)]
+    for col in range(n):
+        piv = next((i for i in range(col, n) if aug[i][col] != 0), None)
+        if piv is None:
+            return None
+        aug[col], aug[piv] = aug[piv], aug[col]
+        for i in range(n):
+            if i != col and aug[i][col] != 0:
+                f = aug[i][col] / aug[col][col]
+                aug[i] = [a - f * p for a, p in zip(aug[i], aug[col], strict=True)]
+    return [aug[i][n] / aug[i][i] for i in range(n)]
+
+
+def _exact_dual_bound(
+    g: list[list[Fraction]], b: list[Fraction], c_phi: list[Fraction], y: np.ndarray
+) -> Fraction | None:
+    """``b'y'`` for the solver's duals repaired to exact feasibility ``G'y' = Phi'c``, ``y' >=
+    0`` (the residual is absorbed by the rows with the largest duals); None if that fails."""
+    k = len(c_phi)
+    yf = [Fraction(float(t)) for t in np.maximum(y, 0.0)]
+    resid = [
+        sum((g[r][j] * yf[r] for r in range(len(g))), Fraction(0)) - c_phi[j] for j in range(k)
+    ]
+    for start in range(max(1, len(g) - k + 1)):
+        chosen = [int(r) for r in np.argsort(-y, kind="stable")[start : start + k]]
+        if len(chosen) < k:
+            return None
+        delta = _solve_exact_system(
+            [[g[r][j] for r in chosen] for j in range(k)], [-t for t in resid]
         )
-        # Lemma 2: SLP(mu-bar) = RLP with this solver's duals; reduced MDP value = v*
-        if solver in mus:
-            mu = mus[solver]
-            ref_solver = names[0]
-            mu_diff = float(np.abs(mu - mus[ref_solver]).max()) if ref_solver in mus else 0.0
-            n_pos = int((mu > 0).sum())
-            try:
-                slp = SLP(mdp, part, mu)
-                res, msg = _solve(slp, solver)
-                dev = np.inf if res is None else float(np.abs(res.values - vstar).max())
-                detail = msg or (
-                    f"SLP(mu-bar) optimum = v*; mu-bar > 0 on {n_pos} pairs, "
-                    f"max|mu-bar - mu-bar({ref_solver})| = {mu_diff:.3g}"
-                )
-                red = solve_exact(slp.reduced_mdp())
-                red_dev = float(np.abs(red.values - vstar).max())
-                red_detail = (
-                    f"value of the reduced MDP (step 2) = v*: {int(slp.rows.n_rows)} (i, u) rows"
-                )
-            except LPBoundsError as exc:
-                dev, red_dev = np.inf, np.inf
-                detail = red_detail = f"SLP failed: {exc}"
-            records.append(_record("Lemma 2", name, solver, dev, tol_p, detail))
-            records.append(_record("Lemma 2", name, solver, red_dev, tol_p, red_detail))
-        # Theorem 2: IB blocks and LLP never beat v*
-        devs, fail = [], ""
-        for L in IB_BLOCKS:
-            res, msg = _solve(IB(mdp, part, L), solver)
-            if res is None:
-                devs.append(np.inf)
-                fail = msg
-                continue
-            devs.append(float(np.abs(res.extra["blocks"] - vstar).max()))
-        records.append(
-            _record(
-                "Theorem 2",
-                name,
-                solver,
-                max(devs),
-                tol_p,
-                fail
-                or f"IB L={IB_BLOCKS[0]}..{IB_BLOCKS[-1]}: every block = v* (>= v* is the theorem)",
-            )
-        )
-        doms, fail, excess = [], "", 0.0
-        for d in d_list:
-            res, msg = _solve(LLP(mdp, part, d), solver)
-            if res is None:
-                doms.append(np.inf)
-                fail = msg
-                continue
-            doms.append(float(np.maximum(vstar - res.values, 0.0).max()))
-            excess = max(excess, float((res.values - vstar).max()))
-        records.append(
-            _record(
-                "Theorem 2",
-                name,
-                solver,
-                max(doms),
-                tol_p,
-                fail
-                or f"LLP with {len(d_list)} random d >= 0: v >= v* (max(v - v*) = {excess:.3g})",
-            )
-        )
-    if len(first_opt) > 1:
-        vals = list(first_opt.values())
-        spread = max(float(np.abs(a - b).max()) for a in vals for b in vals)
-        records.append(
-            _record(
-                "Theorem 1",
-                name,
-                "all",
-                spread,
-                2 * tol_p,
-                f"RLP optima agree across {', '.join(first_opt)}",
-            )
-        )
-    return records
+        if delta is None:
+            continue
+        yy = list(yf)
+        for r, dlt in zip(chosen, delta, strict=True):
+            yy[r] += dlt
+        if all(t >= 0 for t in yy):
+            return sum((b[r] * yy[r] for r in range(len(b))), Fraction(0))
+    return None
+
+
+def alp_value_bracket(
+    mdp: FiniteMDP, basis: np.ndarray, cost: np.ndarray, result: LPResult
+) -> tuple[Fraction | None, Fraction | None]:
+    r"""Exact rational bracket ``[lo, hi]`` on the optimal value of ``ALP(mdp, basis, cost)``.
+
+    The LP ``min (Phi'c)'r  s.t.  G r >= b`` (``G = (E - lambda P) Phi``) is rebuilt in
+    exact rational arithmetic from its floating-point data, so no rounding argument is
+    needed:
+
+    * ``hi``: the solver's ``r`` shifted along ``1`` (``G 1`` is about ``(1 - lambda) Phi 1
+      > 0`` for a soft-aggregation basis) by the least ``delta`` making it exactly
+      feasible; its objective is an upper bound;
+    * ``lo``: the solver's duals ``y >= 0``, with the residual ``G'y - Phi'c`` cancelled
+      exactly on the ``K`` rows of largest dual (a ``K x K`` rational solve), stay ``>= 0``
+      and give the weak-duality bound ``b'y'``.
+
+    Either end is None when its construction fails (the bracket is then unbounded on that
+    side). Meant for the small instances of Remark 2 (cost grows with rows times ``K``).
+    """
+    g, b, c_phi = _exact_alp_data(mdp, basis, cost)
+    r = [Fraction(float(t)) for t in np.asarray(result.values, dtype=np.float64)]
+    k = len(r)
+    slack = [
+        sum((row[j] * r[j] for j in range(k)), Fraction(0)) - bb
+        for row, bb in zip(g, b, strict=True)
+    ]
+    step = [sum(row, Fraction(0)) for row in g]
+    need = [-s / d for s, d in zip(slack, step, strict=True) if s < 0 and d > 0]
+    hi: Fraction | None = None
+    if all(s >= 0 or d > 0 for s, d in zip(slack, step, strict=True)):
+        delta = max(need, default=Fraction(0))
+        hi = sum((cj * (rj + delta) for cj, rj in zip(c_phi, r, strict=True)), Fraction(0))
+    y = np.asarray(result.duals, dtype=np.float64)
+    lo = _exact_dual_bound(g, b, c_phi, y) if np.all(np.isfinite(y)) else None
+    return lo, hi
 
 
 def verify_remark2(
     solvers: Sequence[str], *, seed: int = 0, rtol: float = LP_COMPARE_RTOL
 ) -> list[Record]:
-    """Remark 2: an ALP (soft aggregation) whose optimum depends on the cost, per solver."""
+    """Remark 2: a soft-aggregation ALP whose optimum depends on the cost, per solver.
+
+    The verdict is *holds* when the exact brackets prove ``OPT(c1 + c2) > OPT(c1) +
+    OPT(c2)`` (no point is optimal for both costs), *inconclusive* otherwise; see the
+    module docstring. ``deviation`` is the certified difference ``lo(OPT(c1 + c2)) -
+    hi(OPT(c1)) - hi(OPT(c2))``, ``width`` the widest of the three brackets.
+    """
     names = [resolve_solver(s) for s in solvers]
     ex = find_cost_dependent_alp(seed, rtol=rtol)
     inst = f"soft-agg garnet seed {ex.seed} (n=6, K=2)"
+    costs = [ex.cost1, ex.cost2, ex.cost1 + ex.cost2]
     out = []
     for solver in names:
-        r1, m1 = _solve(ALP(ex.mdp, ex.basis, ex.cost1), solver)
-        r2, m2 = _solve(ALP(ex.mdp, ex.basis, ex.cost2), solver)
-        if r1 is None or r2 is None:
-            out.append(_record("Remark 2", inst, solver, np.nan, np.nan, m1 or m2))
-            continue
-        assert r1.state_values is not None and r2.state_values is not None
-        excess = float(ex.cost1 @ r2.state_values - ex.cost1 @ r1.state_values)
-        tol = rtol * max(1.0, abs(r1.objective))
-        out.append(
-            _record(
-                "Remark 2",
-                inst,
-                solver,
-                excess,
-                tol,
-                "ALP optimum depends on c: c1'Phi r(c2) - c1'Phi r(c1) > tol; "
-                f"max|Phi r(c1) - Phi r(c2)| = "
-                f"{float(np.abs(r1.state_values - r2.state_values).max()):.3g}",
-                larger_passes=True,
+        brackets, fail = [], ""
+        for c in costs:
+            res, msg = _solve(ALP(ex.mdp, ex.basis, c), solver)
+            fail = fail or msg
+            brackets.append(
+                (None, None) if res is None else alp_value_bracket(ex.mdp, ex.basis, c, res)
             )
-        )
+        out.append(_remark2_record(inst, solver, brackets, fail))
     return out
+
+
+def _remark2_record(
+    inst: str, solver: str, brackets: list[tuple[Fraction | None, Fraction | None]], fail: str
+) -> Record:
+    (_lo1, hi1), (_lo2, hi2), (lo12, hi12) = brackets
+    inf = float("inf")
+
+    def width(lo: Fraction | None, hi: Fraction | None) -> float:
+        return inf if lo is None or hi is None else float(hi - lo)
+
+    if lo12 is None or hi1 is None or hi2 is None:
+        diff, verdict = -inf, Verdict.INCONCLUSIVE
+    else:
+        exact = lo12 - hi1 - hi2
+        diff = float(exact)
+        verdict = Verdict.HOLDS if exact > 0 else Verdict.INCONCLUSIVE
+    w = max(width(*bk) for bk in brackets)
+    cmp = Comparison(
+        verdict,
+        w,
+        diff,
+        0.0,
+        0,
+        (-inf if lo12 is None else float(lo12), inf if hi12 is None else float(hi12)),
+        (-inf if hi1 is None or hi2 is None else float(hi1 + hi2),) * 2,
+    )
+    detail = fail or (
+        "certified OPT(c1+c2) - OPT(c1) - OPT(c2) > 0: no common optimum (exact rational "
+        "brackets); lp_interval = OPT(c1+c2), exact_interval = upper OPT(c1) + OPT(c2)"
+    )
+    return _record("Remark 2", "ALP optimum depends on c", inst, solver, cmp, detail)
 
 
 def run_verification(
@@ -532,7 +857,7 @@ def run_verification(
         Model names or paths; default all of ``models/`` with a partition and at most
         ``max_states`` states.
     solvers : sequence of str, optional
-        Default :func:`default_solvers`.
+        Any installed LP solvers; default :func:`default_solvers`.
     include_models : bool
         False: random instances (and Remark 2) only.
 
@@ -558,39 +883,47 @@ def run_verification(
     return records, skipped
 
 
-def summarize(records: Sequence[Record]) -> list[Record]:
-    """One row per (check, solver): records, passed, worst ``max_deviation / tolerance``.
+_CHECK_ORDER = ["Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2", "Remark 2"]
+_VERDICT_RANK = {"holds": 0, "inconclusive": 1, "violated": 2}
 
-    Each row has ``check``, ``solver``, ``records``, ``passed``, ``max_deviation`` and
-    ``tolerance`` of the record with the largest ratio (for "Remark 2": the smallest,
-    since there the deviation must exceed the tolerance).
+
+def _badness(r: Record) -> tuple[int, float]:
+    acc = r["accuracy"]
+    ratio = r["width"] / acc if acc and np.isfinite(acc) else float(r["width"])
+    return _VERDICT_RANK[r["verdict"]], ratio if np.isfinite(ratio) else float("inf")
+
+
+def summarize(records: Sequence[Record]) -> list[Record]:
+    """One row per (check, solver): the verdict counts and the worst record.
+
+    Each row has ``check``, ``solver``, ``records``, ``holds``, ``inconclusive``,
+    ``violated``, and ``verdict``, ``width``, ``accuracy`` of the worst record (worst
+    verdict, then the largest ``width / accuracy``).
     """
     groups: dict[tuple[str, str], list[Record]] = {}
     for r in records:
         groups.setdefault((r["check"], r["solver"]), []).append(r)
-    order = ["Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2", "Remark 2"]
     out = []
     for (check, solver), recs in sorted(
         groups.items(),
-        key=lambda kv: (order.index(kv[0][0]) if kv[0][0] in order else 99, kv[0][1]),
+        key=lambda kv: (
+            _CHECK_ORDER.index(kv[0][0]) if kv[0][0] in _CHECK_ORDER else 99,
+            kv[0][1],
+        ),
     ):
-
-        def ratio(r: Record) -> float:
-            tol = r["tolerance"]
-            return r["max_deviation"] / tol if tol and np.isfinite(tol) else np.inf
-
-        pick = min(recs, key=ratio) if check == "Remark 2" else max(recs, key=ratio)
-        out.append(
-            {
-                "check": check,
-                "solver": solver,
-                "records": len(recs),
-                "passed": sum(bool(r["pass"]) for r in recs),
-                "max_deviation": pick["max_deviation"],
-                "tolerance": pick["tolerance"],
-            }
-        )
+        worst = max(recs, key=_badness)
+        row: Record = {"check": check, "solver": solver, "records": len(recs)}
+        for v in ("holds", "inconclusive", "violated"):
+            row[v] = sum(r["verdict"] == v for r in recs)
+        row.update(verdict=worst["verdict"], width=worst["width"], accuracy=worst["accuracy"])
+        out.append(row)
     return out
+
+
+def exit_status(records: Sequence[Record], *, strict: bool = False) -> int:
+    """1 if a record is *violated* (or, with ``strict``, *inconclusive*), else 0."""
+    bad = {"violated", "inconclusive"} if strict else {"violated"}
+    return 1 if any(r["verdict"] in bad for r in records) else 0
 
 
 def write_json(records: list[Record], path: str | Path) -> None:
