@@ -1,0 +1,105 @@
+"""Ctrl-C during ``lpbounds reproduce``: exit status 130, one line on stderr, and ``--out``
+holds the previous complete output (checked file by file against its manifest), with no
+partial folder or lock left beside it.
+
+The process is interrupted with a real SIGINT: at the start of chosen steps (the
+``LPBOUNDS_INTERRUPT_AT`` hook makes the process signal itself there, so the point is
+exact) and after a delay measured from the moment the run holds its lock."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from lpbounds.patrol.reproduce import INTERRUPT_AT_ENV, reproduce
+
+SMALL = "models/patrol-small.toml"
+ARGS = ["--seeds", "1", "2", "--steps", "500"]
+
+
+@pytest.fixture(scope="module")
+def previous(tmp_path_factory) -> Path:
+    """A complete earlier output (another seed, no figures: it differs from a new one)."""
+    out = tmp_path_factory.mktemp("interrupt") / "out"
+    reproduce(SMALL, out, seeds=(9,), n_steps=100, figures=False)
+    return out
+
+
+def _snapshot(out: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(out.iterdir())}
+
+
+def _assert_complete(out: Path) -> dict:
+    """Every file of ``out`` is in its manifest with the right size and hash."""
+    man = json.loads((out / "manifest.json").read_text())
+    listed = {f["name"]: f for f in man["files"]}
+    assert set(listed) == {p.name for p in out.iterdir()} - {"manifest.json"}
+    for name, f in listed.items():
+        data = (out / name).read_bytes()
+        assert len(data) == f["bytes"] and hashlib.sha256(data).hexdigest() == f["sha256"]
+    return man
+
+
+def _run(out: Path, env_extra: dict[str, str]) -> subprocess.Popen:
+    env = {**os.environ, **env_extra}
+    return subprocess.Popen(
+        [sys.executable, "-m", "lpbounds.cli.main", "reproduce", SMALL, "--out", str(out), *ARGS],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+
+
+def _assert_interrupted(proc: subprocess.Popen, out: Path, before: dict[str, bytes]) -> None:
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1] == "lpbounds reproduce: interrupted"
+    assert _snapshot(out) == before, "the previous output changed"
+    _assert_complete(out)
+    assert sorted(p.name for p in out.parent.iterdir()) == [out.name], "leftovers beside --out"
+
+
+@pytest.mark.parametrize("step", ["vstar", "figures", "write", "commit"])
+def test_interrupt_at_a_step_keeps_the_previous_output(previous, step):
+    before = _snapshot(previous)
+    proc = _run(previous, {INTERRUPT_AT_ENV: step})
+    _assert_interrupted(proc, previous, before)
+
+
+def test_interrupt_after_a_delay_keeps_the_previous_output_or_completes(previous):
+    """A real Ctrl-C 1.5 s after the run took its lock: the previous output unchanged, or
+    (if the run finished first) a complete new one."""
+    before = _snapshot(previous)
+    lock = previous.parent / f".{previous.name}.lock"
+    proc = _run(previous, {})
+    t0 = time.monotonic()
+    while not lock.exists() and proc.poll() is None and time.monotonic() - t0 < 300:
+        time.sleep(0.02)
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=600)
+    assert "Traceback" not in err
+    if proc.returncode == 130:
+        assert _snapshot(previous) == before
+    else:
+        assert proc.returncode == 0, err
+        assert _assert_complete(previous)["instance"] == "patrol-small"
+    assert sorted(p.name for p in previous.parent.iterdir()) == [previous.name]
+
+
+def test_interrupt_without_previous_output_leaves_nothing(tmp_path):
+    out = tmp_path / "fresh"
+    proc = _run(out, {INTERRUPT_AT_ENV: "figures"})
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode == 130 and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
