@@ -177,6 +177,27 @@ def test_sandwich_and_policy_numbers(run, dense):
     assert (vlow <= vsub + tol).all() and (vsub <= vstar + tol).all()
 
 
+def test_certified_sandwich_margins_are_promises(run, dense):
+    """The certified margins (from the LP results' brackets and V*'s error bound) never
+    exceed the true margins, computed here from a dense value iteration of V* and the
+    partition fixed points (checked against dense operators above); and they are
+    below the uncertified margins by at least V*'s error bound."""
+    z, s = run.arrays, run.summary
+    lab = z["partition_of_state"].astype(np.int64)
+    v = _vi(lambda v: _q(dense, v).max(axis=1), z["vstar"].size, dense[3])
+    true_lower = float((v - z["lower"][lab]).min())
+    true_upper = float((z["upper"][lab] - v).min())
+    sw = s["sandwich"]
+    err_v = s["vstar"]["error_bound"]
+    assert sw["certified_lower_margin"] <= true_lower + VALUE_ATOL
+    assert sw["certified_upper_margin"] <= true_upper + VALUE_ATOL
+    assert sw["certified_lower_margin"] <= sw["lower_margin"] - err_v
+    assert sw["certified_upper_margin"] <= sw["upper_margin"] - err_v
+    # and they are not vacuous on this instance: the sandwich is proved
+    assert sw["certified_lower_margin"] > 0 and sw["certified_upper_margin"] > 0
+    assert "the sandwich is proved" in (run.out / "report.md").read_text()
+
+
 def test_claim_counts_by_loops(run, model):
     """Claim 2 on every pair x1 = x2 + e_j, counted with a plain loop over states."""
     z, s = run.arrays, run.summary

@@ -11,7 +11,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from .summary import ClaimsSummary, Inequality, Summary
+from .summary import ClaimsSummary, Inequality, SandwichSummary, Summary
 
 __all__ = ["markdown_table", "monte_carlo_table", "write_report"]
 
@@ -335,7 +335,11 @@ def _section_sandwich(s: Summary, files: dict[str, Path], out: Path) -> list[str
         f"{_fmt(sw.mean_vup_minus_vstar)} (the lower bound is {tighter} on average); "
         f"largest partition gap v* - w* = {_fmt(sw.partition_gap_max)}. "
         f"With the LP solutions in place of the fixed points the margins are "
-        f"{_fmt(sw.lp_lower_margin)} (lower) and {_fmt(sw.lp_upper_margin)} (upper).\n",
+        f"{_fmt(sw.lp_lower_margin)} (lower) and {_fmt(sw.lp_upper_margin)} (upper); "
+        f"certified from the LPs' returned points (their certified brackets on the exact "
+        f"LP optima, widened by V*'s error bound) they are "
+        f"{_fmt(sw.certified_lower_margin)} and {_fmt(sw.certified_upper_margin)}"
+        f"{_certified_verdict(sw)}.\n",
         f"pi_s differs from pi* on {po.differs_states:,} states "
         f"({100 * po.differs_fraction:.2f} %; this count includes actions tied under "
         "V_low or V*, where the tie rule decides); its action loses more than "
@@ -421,6 +425,15 @@ def _section_times(s: Summary) -> list[str]:
         ),
         "",
     ]
+
+
+def _certified_verdict(sw: SandwichSummary) -> str:
+    margins = (sw.certified_lower_margin, sw.certified_upper_margin)
+    if None in margins:
+        return " (an LP result without a certificate: not proved from the LPs)"
+    if min(m for m in margins if m is not None) > 0:
+        return " (both positive: the sandwich is proved for the exact optima)"
+    return " (not both positive: the sandwich is not proved from the LPs' points)"
 
 
 def _inequality_row(label: str, check: Inequality) -> list[Any]:

@@ -369,6 +369,9 @@ class Bounds:
     err_up: float
     err_low: float
     lp_values: dict[str, np.ndarray]
+    #: the LP results' certified brackets on their exact optima (None: no certificate)
+    lp_lower: dict[str, np.ndarray | None]
+    lp_upper: dict[str, np.ndarray | None]
 
 
 @dataclass
@@ -453,6 +456,8 @@ def solve_bounds(params: PatrolParams, solver: str, tr: Tracker) -> Bounds:
     summaries: dict[str, LPSummary] = {}
     fp: dict[str, Any] = {}
     lp_vals: dict[str, np.ndarray] = {}
+    lp_lower: dict[str, np.ndarray | None] = {}
+    lp_upper: dict[str, np.ndarray | None] = {}
     solver_options = dict(SOLVER_OPTIONS.get(solver, {}))
     with tr.step("bounds", f"UBLP and LBLP ({solver}) and their fixed points", 4) as adv:
         for key, cls, kind in (("ublp", UBLP, "upper"), ("lblp", LBLP, "lower")):
@@ -464,6 +469,8 @@ def solve_bounds(params: PatrolParams, solver: str, tr: Tracker) -> Bounds:
             fp[key] = f
             adv(status=f"{cls.name} fixed point")
             lp_vals[key] = np.asarray(lp_res.values, dtype=np.float64)
+            lp_lower[key] = _array_or_none(lp_res.lower_values)
+            lp_upper[key] = _array_or_none(lp_res.upper_values)
             summaries[key] = LPSummary(
                 solver=lp_res.solver,
                 solver_options=solver_options,
@@ -482,6 +489,7 @@ def solve_bounds(params: PatrolParams, solver: str, tr: Tracker) -> Bounds:
                 lp_minus_fixed_point_max_abs=float(np.abs(lp_vals[key] - f.values).max()),
                 lp_values_min=float(np.min(lp_res.values)),
                 lp_values_max=float(np.max(lp_res.values)),
+                certified_error_bound=float(lp_res.error_bound),
             )
     return Bounds(
         summaries=summaries,
@@ -490,6 +498,8 @@ def solve_bounds(params: PatrolParams, solver: str, tr: Tracker) -> Bounds:
         err_up=fp["ublp"].error_bound,
         err_low=fp["lblp"].error_bound,
         lp_values=lp_vals,
+        lp_lower=lp_lower,
+        lp_upper=lp_upper,
     )
 
 
@@ -698,6 +708,7 @@ def check_sandwich(
             # the same margins with the LP solutions in place of the fixed points
             lp_lower_margin=float((part.aggregate(vstar, "min") - bounds.lp_values["lblp"]).min()),
             lp_upper_margin=float((bounds.lp_values["ublp"] - part.aggregate(vstar, "max")).min()),
+            **_certified_margins(bounds, labels, vstar, err_v),
         )
         adv(status="sandwich")
         pi_s = np.asarray(greedy_policy(mdp, v_low_s), dtype=np.int64)
@@ -1007,6 +1018,26 @@ def write_outputs(
         setattr(summary, key, value)
     files["summary"].write_text(json.dumps(jsonable(summary), indent=2) + "\n")
     return files
+
+
+def _certified_margins(
+    bounds: Bounds, labels: np.ndarray, vstar: np.ndarray, err_v: float
+) -> dict[str, float | None]:
+    """The sandwich's margins from the LP results' certified brackets and ``V*``'s error
+    bound: positive margins prove the sandwich for the exact quantities."""
+    w_up, v_lo = bounds.lp_upper["lblp"], bounds.lp_lower["ublp"]
+    return {
+        "certified_lower_margin": None
+        if w_up is None
+        else float(((vstar - err_v) - w_up[labels]).min()),
+        "certified_upper_margin": None
+        if v_lo is None
+        else float((v_lo[labels] - (vstar + err_v)).min()),
+    }
+
+
+def _array_or_none(x: Any) -> np.ndarray | None:
+    return None if x is None else np.asarray(x, dtype=np.float64)
 
 
 def _action_counts(mdp: Any, policy: np.ndarray) -> dict[str, int]:

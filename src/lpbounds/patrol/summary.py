@@ -127,6 +127,9 @@ class LPSummary:
     lp_minus_fixed_point_max_abs: float
     lp_values_min: float
     lp_values_max: float
+    #: certified ``max |LP values - exact LP optimum|`` from the returned point
+    #: (:attr:`lpbounds.formulations.base.LPResult.error_bound`; ``inf`` without one)
+    certified_error_bound: float
 
 
 @dataclass
@@ -213,6 +216,13 @@ class SandwichSummary:
     mean_vup_minus_vstar: float
     lp_lower_margin: float
     lp_upper_margin: float
+    #: ``min_x (V*(x) - err(V*)) - w_upper(i(x))`` with ``w_upper`` LBLP's certified upper
+    #: bracket on its exact optimum: > 0 proves ``w*(i) <= V*(x)`` everywhere, from the
+    #: returned points alone (``None`` when the LP result has no certificate)
+    certified_lower_margin: float | None
+    #: ``min_x v_lower(i(x)) - (V*(x) + err(V*))`` with ``v_lower`` UBLP's certified lower
+    #: bracket: > 0 proves ``V*(x) <= v*(i)``
+    certified_upper_margin: float | None
 
 
 @dataclass
