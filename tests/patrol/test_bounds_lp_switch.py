@@ -20,5 +20,5 @@ def test_lp_forced_and_contradiction(tmp_path, capsys):
     args = ["bounds", "patrol-small", "--lp", "--lp-max-partitions", "10", "--json", str(out)]
     assert main(args) == 0
     assert json.loads(out.read_text())["lp_solved"] is True
-    assert main(["bounds", "patrol-small", "--lp", "--no-lp"]) == 1
+    assert main(["bounds", "patrol-small", "--lp", "--no-lp"]) == 2  # a usage error
     assert "contradict" in capsys.readouterr().err

@@ -67,6 +67,8 @@ def run(args: argparse.Namespace) -> int:
     from ..patrol.instance import params_from_instance
     from ..patrol.partitions import partition_components
 
+    if args.lp and args.no_lp:
+        raise ValidationError("--lp and --no-lp contradict each other")
     inst = load_instance(args.model)
     params = params_from_instance(inst)
     if args.json:
@@ -79,8 +81,6 @@ def run(args: argparse.Namespace) -> int:
     }
     times: dict[str, float] = {}
     t_all = time.perf_counter()
-    if args.lp and args.no_lp:
-        raise ValidationError("--lp and --no-lp contradict each other")
     solve_lp = not args.no_lp and (args.lp or params.n_partitions <= args.lp_max_partitions)
     out["lp_solved"] = solve_lp
     if not solve_lp:
