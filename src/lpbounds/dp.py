@@ -106,7 +106,7 @@ def post_decision_rows(model: Model) -> PostDecisionRows | None:
     if cached is None:
         cached = PostDecisionRows.detect(model) or False
         model.__dict__["_post_decision"] = cached
-    return cached or None
+    return cached if isinstance(cached, PostDecisionRows) else None
 
 
 def _default_tol(rows: BellmanRows | PostDecisionRows, tol: float | None) -> float:
@@ -531,10 +531,14 @@ def _iterate(
         kw["w"] = rows.new_work()  # reused by every sweep of this solve
     else:
         arg = np.zeros(rows.n_vars, dtype=np.int64)
+    maxmin = None
+    if game:  # the game operator exists on row systems only (solve_game checks the type)
+        assert isinstance(rows, BellmanRows)
+        maxmin = rows._sweep_maxmin
     c = 0.0
     for it in range(max_iter + 1):
-        if game:
-            lo, hi = rows._sweep_maxmin(u, buf, arg)
+        if maxmin is not None:
+            lo, hi = maxmin(u, buf, arg)
         else:
             lo, hi = rows._sweep_max(u, buf, arg, nchunks, **kw)
         sweeps += 1
