@@ -270,6 +270,18 @@ CASES: dict[str, Case] = {
         lambda: lb.Partition([0, 2**40]),
         r"labels\[1\] = 1099511627776 is out of range \[0, 2\)",
     ),
+    "labels-beyond-int64": (
+        lambda: lb.Partition([0, 2**70]),
+        r"labels\[1\] = 1180591620717411303424 is out of range \(beyond 64-bit",
+    ),
+    "succ-beyond-uint64": (
+        lambda: lb.FiniteMDP([[[0, 2**64]]], [0.5, 0.5], [[0.0]], 0.9),
+        r"successors\[0, 0, 1\] = 18446744073709551616 is out of range",
+    ),
+    "rew-python-int-beyond-float64": (
+        lambda: lb.FiniteMDP([[[0]]], [1.0], [[2**2000]], 0.9),
+        r"rewards has an entry beyond float64",
+    ),
     "labels-strings": (lambda: lb.Partition(["a", "b"]), r"labels must hold integers; got strings"),
     "labels-bool": (
         lambda: lb.Partition([True, False]),

@@ -192,7 +192,14 @@ def _check_kind(name: str, arr: np.ndarray, integer: bool) -> np.ndarray:
                     f"{entry(name, idx)} = {_show(item)} is not "
                     f"{'an integer' if integer else 'a real number'}"
                 )
-        return arr.astype(np.int64 if integer else np.float64)
+            if integer and not -(2**63) <= int(item) < 2**63:
+                raise ValidationError(
+                    f"{entry(name, idx)} = {int(item)} is out of range (beyond 64-bit integers)"
+                )
+        try:
+            return arr.astype(np.int64 if integer else np.float64)
+        except OverflowError as exc:  # a Python int beyond float64
+            raise ValidationError(f"{name} has an entry beyond float64: {exc}") from None
     what = {"b": "booleans", "c": "complex numbers", "U": "strings", "S": "bytes"}.get(
         kind, f"dtype {arr.dtype}"
     )
