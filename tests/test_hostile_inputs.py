@@ -212,6 +212,10 @@ CASES: dict[str, Case] = {
     "discount-1": (lambda: mdp_with(discount=1), r"discount must lie in \[0, 1\); got 1\.0"),
     "discount-negative": (lambda: mdp_with(discount=-0.1), r"discount must lie in \[0, 1\)"),
     "discount-1.0000001": (lambda: mdp_with(discount=1.0000001), r"discount must lie in \[0, 1\)"),
+    "discount-int-beyond-float64": (
+        lambda: mdp_with(discount=2**2000),
+        r"discount = 11481306952742545242\d+\.\.\. \(int\) is beyond float64",
+    ),
     "discount-nan": (lambda: mdp_with(discount=float("nan")), r"discount must be a finite number"),
     "discount-inf": (lambda: mdp_with(discount=float("inf")), r"discount must be a finite number"),
     # --------------------------------------------------------------- allowed, names, copy

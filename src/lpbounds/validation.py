@@ -58,7 +58,6 @@ __all__ = [
 MAX_VALUE_SCALE: float = 1e300
 
 _NUMERIC_KINDS = frozenset("iuf")
-_INTEGER_KINDS = frozenset("iu")
 
 
 # ---------------------------------------------------------------------- helpers
@@ -119,7 +118,10 @@ def check_real(
     """
     if not _is_real(x):
         raise ValidationError(f"{name} must be a real number; got {_show(x)}")
-    v = float(x)
+    try:
+        v = float(x)
+    except OverflowError:  # a Python int beyond float64
+        raise ValidationError(f"{name} = {_show(x)} is beyond float64") from None
     if np.isnan(v) or (finite and not np.isfinite(v)):
         raise ValidationError(f"{name} must be a finite number; got {v}")
     below = lo is not None and (v <= lo if lo_open else v < lo)
