@@ -100,6 +100,27 @@ def test_inequality_verdicts_by_hand():
     assert bad.verdict is Verdict.VIOLATED and bad.index == 1
 
 
+def test_objective_bracket_is_tight_for_a_non_unique_optimum():
+    """A cost with zeros: Clarabel returns a point inside the optimal face, far from V* where
+    c = 0 (wide per-entry bracket); the duality bound still pins c'V* (policy iteration)."""
+    from lpbounds.checks import lp_bracket, lp_objective_bracket
+    from lpbounds.formulations import ELP
+
+    mdp = lb.garnet(31, 2, 3, 0.685, seed=4)
+    cost = np.random.default_rng(1).uniform(0, 1, 31)
+    cost[::3] = 0.0
+    form = ELP(mdp, cost)
+    res = form.solve("CLARABEL", raise_on_failure=False)
+    br = lp_bracket(form, res)
+    lo, hi = lp_objective_bracket(form, res, br)
+    ref = float(cost @ lb.solve_exact(mdp, method="pi").values)
+    assert lo <= ref <= hi
+    assert hi - lo < 1e-6 * max(1.0, abs(ref)), (lo, hi)
+    c_lo, c_hi = float(cost @ br.lower), float(cost @ br.upper)
+    assert c_lo <= ref <= c_hi  # the plain bracket is valid too, but wider:
+    assert hi - lo < (c_hi - c_lo) / 5, "weak duality must tighten c'[lower, upper]"
+
+
 # ---------------------------------------------------------------------- one instance
 @pytest.fixture(scope="module")
 def normal_records(tiny_instance):

@@ -118,8 +118,10 @@ def lp_objective_bracket(formulation: Any, result: Any, bracket: Bracket) -> tup
     the bracket). This stays tight when ``c`` has zeros and the returned point is a
     non-unique optimum far from ``v*`` in the zero-cost entries (then ``c'lower`` is
     loose). Rounding: ``|fl(A'y) - A'y| <= (k + 2) eps (|A|'y + |c|)`` with ``k`` the most
-    entries of a column, ``|fl(b'y) - b'y| <= (R + 2) eps |b|'y``, and the last sum is
-    inflated by ``(N + 3) eps`` relative; every bound is then rounded outward.
+    entries of a column, ``|fl(b'y) - b'y| <= (R + 2) eps |b|'y``, the last sum is
+    inflated by ``(N + 3) eps`` relative, and ``(k + 3) eps y'(|b| + |A| |v|)`` covers the
+    rounding of the rows into ``(A, b)`` (``v*`` satisfies the rows exactly, ``A v* >= b``
+    only up to that); every bound is then rounded outward.
     """
     c = np.asarray(formulation.c, dtype=np.float64)
     n = c.size + 1
@@ -135,6 +137,8 @@ def lp_objective_bracket(formulation: Any, result: Any, bracket: Bracket) -> tup
         resid = np.abs(a.T @ y - c) + (k + 2) * _EPS * (abs(a).T @ y + np.abs(c))
         size = np.maximum(np.abs(bracket.lower), np.abs(bracket.upper))
         corr = float((resid * size).sum()) * (1.0 + (c.size + 3) * _EPS)
+        # A and b are the rows rounded into a matrix: v* may miss A v* >= b by that much
+        corr += (k + 3) * _EPS * float(y @ (np.abs(b) + abs(a) @ size))
         by = float(b @ y) - (b.size + 2) * _EPS * float(np.abs(b) @ y)
         dual_lo = float(_down(by - corr - _TINY))
         if np.isfinite(dual_lo):
