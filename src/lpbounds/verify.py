@@ -85,7 +85,7 @@ from .checks import (
     lp_bracket,
     lp_objective_bracket,
 )
-from .dp import solve_exact
+from .dp import exact_rows, solve_exact
 from .errors import LPBoundsError, ValidationError
 from .formulations import (
     ELP,
@@ -678,7 +678,7 @@ def _exact_alp_data(
 ) -> tuple[list[list[Fraction]], list[Fraction], list[Fraction]]:
     """``G = (E - lambda P) Phi``, ``b = R`` and ``Phi' c`` in exact rational arithmetic,
     from the floating-point data taken as exact."""
-    rows = ELP(mdp).rows
+    rows = exact_rows(mdp)
     lam = Fraction(float(rows.discount))
     phi = [[Fraction(float(t)) for t in row] for row in np.asarray(basis, dtype=np.float64)]
     n_feat = len(phi[0])
