@@ -231,3 +231,16 @@ def test_discount_is_never_coerced(bad):
     succ, probs, rewards = _arrays()
     with pytest.raises(ValidationError, match="discount must be a real number"):
         lb.FiniteMDP(succ, probs, rewards, bad)
+
+
+def test_copy_true_copies_views_of_the_callers_arrays():
+    """A view (``a[::1]``, a memmap) is not the same object as the caller's array but is
+    the same memory: ``copy=True`` must still copy it, or a later write by the caller
+    would change the model behind its read-only arrays."""
+    succ, probs, rewards = _arrays()
+    succ = succ.astype(np.int32)
+    mdp = lb.FiniteMDP(succ[::1], probs, rewards[::1], 0.9)
+    assert not np.shares_memory(mdp.successors, succ)
+    assert not np.shares_memory(mdp.rewards, rewards)
+    rewards[0, 0] = 99.0
+    assert mdp.rewards[0, 0] == 0.0

@@ -67,6 +67,11 @@ def _check_successors(succ, allow, n):  # pragma: no cover - compiled
     return bad, first, bad_disallowed
 
 
+def _shares(stored: np.ndarray, given: Any) -> bool:
+    """True when ``stored`` may be the caller's memory (a view, a memmap, the array itself)."""
+    return isinstance(given, np.ndarray) and np.may_share_memory(stored, given)
+
+
 def _readonly(a: np.ndarray) -> np.ndarray:
     a.flags.writeable = False
     return a
@@ -207,14 +212,14 @@ class FiniteMDP:
                 )
             owned = not copy and succ.flags.c_contiguous
             out = succ if owned else np.ascontiguousarray(succ)
-            if out is given and copy:
+            if copy and _shares(out, given):
                 out = out.copy()
         else:  # a cast is needed anyway: check in the given dtype, then cast
             _, n_bad_disallowed = check_indices("successors", succ, n, where=allow[:, :, None])
             with np.errstate(invalid="ignore"):  # disallowed entries may not fit: replaced
                 out = np.ascontiguousarray(succ, dtype=idt)
         if n_bad_disallowed:  # never read, but keep every stored index in range
-            if not out.flags.writeable or out is given:
+            if not out.flags.writeable or (copy and _shares(out, given)):
                 out = out.copy()
             rows, cols = np.nonzero(~allow)
             out[rows, cols, :] = rows[:, None].astype(idt)
@@ -236,7 +241,7 @@ class FiniteMDP:
             )
         if not (rew[~allow] == 0.0).all():
             rew = np.where(allow, rew, 0.0)  # disallowed rewards are stored as 0
-        elif copy and rew is rewards:
+        elif copy and _shares(rew, rewards):
             rew = rew.copy()
         return rew
 
