@@ -112,11 +112,12 @@ PAPER_TABLE1 = {
 #: Options per cvxpy solver for UBLP/LBLP: HiGHS's interior point method with crossover
 #: (a vertex solution, as simplex gives). No ``threads`` option: HiGHS (1.16) refuses a
 #: thread count that differs from the one its scheduler started with in the process, so
-#: ``threads: 1`` made every reproduction after any other HiGHS solve fail. It bought
-#: nothing: measured side by side (one fresh process per configuration, highspy 1.16,
-#: 2 cores, load ~6 from other jobs, so CPU seconds), UBLP / LBLP of patrol-paper took
-#: 3.05 / 2.46 s CPU with ipm + threads 1, 2.97 / 2.46 s with ipm on the default threads,
-#: 4.99 / 4.15 s with HiGHS's default (simplex); patrol-small 0.01 s in every case.
+#: ``threads: 1`` made every reproduction after any other HiGHS solve fail; and it bought
+#: nothing. Measured side by side in one run (highspy 1.16, one fresh process per
+#: configuration, 2 cores shared at load ~4.5), LP solve wall / CPU seconds on
+#: patrol-paper: UBLP ipm + threads 1: 3.36 / 2.97, ipm on the default threads:
+#: 3.01 / 3.13, HiGHS's default (simplex): 7.47 / 5.08; LBLP 2.54 / 2.52, 2.55 / 2.51,
+#: 4.67 / 3.95. patrol-small: about 0.01 s in every configuration. IPM is what is fast.
 SOLVER_OPTIONS: dict[str, dict[str, Any]] = {"HIGHS": {"highs_options": {"solver": "ipm"}}}
 #: Paper, Section 5: the example's counts.
 PAPER_COUNTS = {"n_states": 2_048_000, "n_partitions": 8_900}
