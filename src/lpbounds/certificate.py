@@ -130,33 +130,38 @@ def objective_bracket(cost: Any, lower: np.ndarray, upper: np.ndarray) -> tuple[
 def dual_objective_bound(
     A: Any, b: np.ndarray, c: np.ndarray, y: Any, lower: np.ndarray, upper: np.ndarray
 ) -> float:
-    r"""A rigorous lower bound on ``min {c'v : A v >= b}`` from any multipliers ``y``.
+    r"""A rigorous lower bound on ``c'v*`` from any multipliers ``y`` (weak duality on a box).
 
-    For ``y >= 0`` and any feasible ``v`` in the box ``[lower, upper]`` (which contains the
-    optimum ``v*`` by the certificate), ``c'v = y'Av + (c - A'y)'v >= y'b + sum_j
-    min(r_j lower_j, r_j upper_j)`` with the reduced costs ``r = c - A'y`` (weak duality on
-    a box). Where a cost is 0 the certificate's box may be wide but ``r`` is then tiny, so
-    this bound certifies optimality of the objective where the point itself is not
-    unique. Rounding: ``y'b`` and each ``r_j`` are sums of at most ``k + 1`` products
-    (``k`` = the most entries of a column or of ``b``), so each is within ``(k + 2) eps``
-    times the sum of its terms' magnitudes; those allowances are subtracted.
+    For ``y >= 0`` and ``r = A'y - c``, the optimum ``v*`` satisfies ``A v* >= b`` and lies
+    in ``[lower, upper]`` (the certificate), so ``c'v* = y'A v* - r'v* >= b'y - sum_j |r_j|
+    max(|lower_j|, |upper_j|)``. Where a cost is 0 the box may be wide but ``r`` is then
+    tiny, so this bound certifies the objective where the point itself is not unique.
+
+    Rounding: ``|fl(A'y) - A'y| <= (k + 2) eps (|A|'y + |c|)`` with ``k`` the most entries
+    of a column, ``|fl(b'y) - b'y| <= (R + 2) eps |b|'y``, the last sum is inflated by
+    ``(N + 3) eps`` relative, and ``(k + 3) eps y'(|b| + |A| |v|)`` covers the rounding of
+    the rows into ``(A, b)`` (``v*`` satisfies the rows exactly, ``A v* >= b`` only up to
+    that); the bound is then rounded down. ``-inf`` when nothing can be said (non-finite
+    duals or box).
     """
-    yy = np.maximum(np.nan_to_num(np.asarray(y, dtype=np.float64), nan=0.0), 0.0)
-    if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+    yy = np.asarray(y, dtype=np.float64)
+    if (
+        yy.shape != (A.shape[0],)
+        or not np.all(np.isfinite(yy))
+        or not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper)))
+    ):
         return -float("inf")
+    yy = np.maximum(yy, 0.0)
+    bb = np.asarray(b, dtype=np.float64)
+    k = int(np.diff(A.tocsc().indptr).max(initial=0))
     a_abs = abs(A)
-    k = int(np.diff(A.tocsc().indptr).max(initial=0)) + 2
-    red = c - A.T @ yy
-    red_err = (k + 2) * _EPS * (np.abs(c) + a_abs.T @ yy)
-    box = np.minimum(red * lower, red * upper) - red_err * np.maximum(np.abs(lower), np.abs(upper))
-    yb_terms = yy * b
-    total = float(yb_terms.sum()) + float(box.sum())
-    err = (b.size + 2) * _EPS * float(np.abs(yb_terms).sum()) + (box.size + 2) * _EPS * float(
-        np.abs(box).sum()
-    )
-    if not np.isfinite(total):
-        return -float("inf")
-    return float(np.nextafter(total - err - _TINY, -np.inf))
+    resid = np.abs(A.T @ yy - c) + (k + 2) * _EPS * (a_abs.T @ yy + np.abs(c))
+    size = np.maximum(np.abs(lower), np.abs(upper))
+    corr = float((resid * size).sum()) * (1.0 + (c.size + 3) * _EPS)
+    corr += (k + 3) * _EPS * float(yy @ (np.abs(bb) + a_abs @ size))
+    by = float(bb @ yy) - (bb.size + 2) * _EPS * float(np.abs(bb) @ yy)
+    out = by - corr - _TINY
+    return float(np.nextafter(out, -np.inf)) if np.isfinite(out) else -float("inf")
 
 
 def contraction_modulus(rows: BellmanRows) -> float:

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .certificate import certify
+from .certificate import certify, dual_objective_bound, objective_bracket
 from .status import Verdict
 
 __all__ = [
@@ -124,26 +124,10 @@ def lp_objective_bracket(formulation: Any, result: Any, bracket: Bracket) -> tup
     only up to that); every bound is then rounded outward.
     """
     c = np.asarray(formulation.c, dtype=np.float64)
-    n = c.size + 1
-    lo_t, hi_t = c * bracket.lower, c * bracket.upper
-    hi = float(_up(hi_t.sum() + n * _EPS * np.abs(hi_t).sum() + _TINY))
-    lo = float(_down(lo_t.sum() - n * _EPS * np.abs(lo_t).sum() - _TINY))
-    y = np.asarray(getattr(result, "duals", np.array([])), dtype=np.float64)
-    a = formulation.A
-    if y.shape == (a.shape[0],) and np.all(np.isfinite(y)) and np.all(np.isfinite(bracket.upper)):
-        y = np.maximum(y, 0.0)
-        b = np.asarray(formulation.b, dtype=np.float64)
-        k = int(np.diff(a.tocsc().indptr).max(initial=0))
-        resid = np.abs(a.T @ y - c) + (k + 2) * _EPS * (abs(a).T @ y + np.abs(c))
-        size = np.maximum(np.abs(bracket.lower), np.abs(bracket.upper))
-        corr = float((resid * size).sum()) * (1.0 + (c.size + 3) * _EPS)
-        # A and b are the rows rounded into a matrix: v* may miss A v* >= b by that much
-        corr += (k + 3) * _EPS * float(y @ (np.abs(b) + abs(a) @ size))
-        by = float(b @ y) - (b.size + 2) * _EPS * float(np.abs(b) @ y)
-        dual_lo = float(_down(by - corr - _TINY))
-        if np.isfinite(dual_lo):
-            lo = max(lo, dual_lo)
-    return lo, hi
+    lo, hi = objective_bracket(c, bracket.lower, bracket.upper)
+    y = getattr(result, "duals", np.array([]))
+    a, b = formulation.A, formulation.b
+    return max(lo, dual_objective_bound(a, b, c, y, bracket.lower, bracket.upper)), hi
 
 
 def dp_interval(dp_result: Any) -> tuple[np.ndarray, np.ndarray]:
