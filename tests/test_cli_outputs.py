@@ -265,3 +265,39 @@ def test_atomic_directory_replaces_the_previous_output_only_on_commit(tmp_path):
         target.commit()
     assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "new.txt"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
+
+
+# ---------------------------------------------------------------------- models as package data
+def test_models_are_package_data_and_resolve_from_any_directory(tmp_path, monkeypatch):
+    """Every file of the repository's models/ is in the package's folder, and a bare name,
+    a file name and the README's models/... path all resolve there from a directory
+    without a models/ folder."""
+    from lpbounds.instances import load_instance, packaged_models_dir, resolve_instance_path
+
+    repo_models = Path(__file__).resolve().parents[1] / "models"
+    packaged = packaged_models_dir()
+    assert packaged.is_dir()
+    assert {p.name for p in repo_models.glob("*.toml")} <= {p.name for p in packaged.glob("*")}
+    monkeypatch.chdir(tmp_path)
+    for spec in ("patrol-small", "patrol-small.toml", "models/patrol-small.toml"):
+        assert resolve_instance_path(spec) == packaged / "patrol-small.toml", spec
+    assert load_instance("models/garnet-small.toml").name == "garnet-small"
+    # a file that exists is used first, even with a packaged model's name
+    (tmp_path / "models").mkdir()
+    own = tmp_path / "models" / "garnet-small.toml"
+    own.write_text(
+        (packaged / "garnet-small.toml").read_text().replace("n_states = 300", "n_states = 40")
+    )
+    assert load_instance("models/garnet-small.toml").mdp().n_states == 40
+
+
+def test_cli_runs_a_packaged_model_outside_the_checkout(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "lpbounds.cli.main", "solve", "models/garnet-small.toml"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "exact solve of garnet-small" in proc.stdout
