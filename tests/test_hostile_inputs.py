@@ -606,6 +606,39 @@ CASES: dict[str, Case] = {
         lambda: instance_partition({"kind": ["random"], "n_partitions": 2}),
         r"unknown partition kind \['random'\]",
     ),
+    # LP solve arguments: refused before the solver is called
+    "solve-time-limit-negative": (
+        lambda: ELP(MDP).solve("HIGHS", time_limit=-1),
+        r"time_limit must lie in \(0",
+    ),
+    "solve-time-limit-str": (
+        lambda: ELP(MDP).solve("HIGHS", time_limit="a"),
+        r"time_limit must be a real number",
+    ),
+    "solve-max-iters-float": (
+        lambda: ELP(MDP).solve("HIGHS", max_iters=2.5),
+        r"max_iters must be an integer",
+    ),
+    "solve-accuracy-negative": (
+        lambda: ELP(MDP).solve("HIGHS", accuracy=-1.0),
+        r"accuracy must be a positive",
+    ),
+    "solve-accuracy-str": (
+        lambda: ELP(MDP).solve("HIGHS", accuracy="abc"),
+        r"accuracy must be a positive",
+    ),
+    "solve-verbose-str": (
+        lambda: ELP(MDP).solve("HIGHS", verbose="yes"),
+        r"verbose must be True or False",
+    ),
+    "solve-raise-on-failure-int": (
+        lambda: ELP(MDP).solve("HIGHS", raise_on_failure=1),
+        r"raise_on_failure must be True or False",
+    ),
+    "solve-solver-none": (
+        lambda: ELP(MDP).solve(None),
+        r"solver must be a name",
+    ),
 }
 
 

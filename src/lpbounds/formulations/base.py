@@ -37,6 +37,7 @@ from ..certificate import Certificate, dual_objective_bound
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
 from ..status import Status
 from ..tolerances import LP_CERT_RTOL
+from ..validation import as_float_array, check_bool, check_int, check_real
 
 __all__ = [
     "Formulation",
@@ -147,11 +148,9 @@ def check_cost(cost: Any, n: int, what: str = "cost") -> np.ndarray:
     """A validated non-negative cost vector of length ``n`` (default: all ones)."""
     if cost is None:
         return np.ones(n)
-    c = np.asarray(cost, dtype=np.float64)
+    c = as_float_array(what, cost)
     if c.shape != (n,):
         raise ValidationError(f"{what} must have length {n}; got shape {c.shape}")
-    if not np.all(np.isfinite(c)):
-        raise ValidationError(f"{what} must be finite")
     if (c < 0).any():
         i = int(np.flatnonzero(c < 0)[0])
         raise ValidationError(f"{what}[{i}] = {c[i]} is negative; costs must be >= 0")
@@ -273,6 +272,21 @@ def _check_accuracy(accuracy: Any) -> float:
     if not (np.isfinite(acc) and acc > 0):
         raise ValidationError(f"accuracy must be a positive finite number; got {accuracy!r}")
     return acc
+
+
+#: Solver options whose meaning cvxpy fixes across solvers: checked here, so a negative
+#: time limit is a clear error rather than a solver's rejection after the model is built.
+_POSITIVE_REAL_OPTIONS = ("time_limit",)
+_POSITIVE_INT_OPTIONS = ("max_iters", "max_iter")
+
+
+def _check_common_options(options: dict[str, Any]) -> None:
+    for key in _POSITIVE_REAL_OPTIONS:
+        if key in options:
+            check_real(key, options[key], lo=0.0, lo_open=True)
+    for key in _POSITIVE_INT_OPTIONS:
+        if key in options:
+            check_int(key, options[key], lo=1)
 
 
 @dataclass
@@ -406,11 +420,10 @@ class Formulation:
         LPResult
         """
         acc = _check_accuracy(accuracy)
-        if not isinstance(raise_on_failure, (bool, np.bool_)):
-            raise ValidationError(
-                f"raise_on_failure must be True or False; got {raise_on_failure!r}"
-            )
-        run = self._run(resolve_solver(solver), bool(verbose), solver_options)
+        raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
+        verbose = check_bool("verbose", verbose)
+        _check_common_options(solver_options)
+        run = self._run(resolve_solver(solver), verbose, solver_options)
         if run.x is None:
             return self._failed(run, acc, raise_on_failure)
         result = self._judge(run, acc)
