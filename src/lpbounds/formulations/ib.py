@@ -24,13 +24,6 @@ from .rows_lp import RowsLP
 __all__ = ["IB", "LLP"]
 
 
-def _check_partition(mdp: FiniteMDP, partition: Partition) -> None:
-    if partition.n_states != mdp.n_states:
-        raise ValidationError(
-            f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
-        )
-
-
 class IB(RowsLP):
     r"""The iterated-Bellman lifted LP over partitions (eq. 20-22), ``L >= 1`` blocks.
 
@@ -68,7 +61,6 @@ class IB(RowsLP):
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, L: int, cost: Any = None) -> None:
         check_formulation_inputs(mdp, partition, cost=cost)
-        _check_partition(mdp, partition)
         if isinstance(L, bool) or not isinstance(L, (int, np.integer)) or L < 1:
             raise ValidationError(f"L must be an integer >= 1; got {L!r}")
         self.mdp = mdp
@@ -175,7 +167,6 @@ class LLP(Formulation):
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, d: Any, cost: Any = None) -> None:
         check_formulation_inputs(mdp, partition, cost=cost, d=d)
-        _check_partition(mdp, partition)
         self.mdp = mdp
         self.partition = partition
         n, n_actions = mdp.n_states, mdp.n_actions
