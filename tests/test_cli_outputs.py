@@ -72,6 +72,22 @@ def test_out_that_is_a_file_is_rejected_before_any_computation(tmp_path, capsys,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
 
 
+def test_out_holding_other_files_is_refused_not_replaced(tmp_path, capsys, no_computation):
+    """--out is replaced as a whole, so a folder with anything but this command's files
+    (here a user's notes, or a subfolder) is refused before any computation."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("keep me")
+    (out / "summary.json").write_text("{}")
+    assert main(["reproduce", SMALL, "--out", str(out), *QUICK]) == 2
+    _one_line_error(capsys, "--out", "notes.txt", "new or empty folder")
+    assert (out / "notes.txt").read_text() == "keep me"
+    (out / "notes.txt").unlink()
+    (out / "sub").mkdir()
+    assert main(["reproduce", SMALL, "--out", str(out), *QUICK]) == 2
+    _one_line_error(capsys, "sub")
+
+
 def test_out_below_a_file_is_rejected(tmp_path, capsys, no_computation):
     f = tmp_path / "file"
     f.write_text("")

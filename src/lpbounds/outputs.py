@@ -20,6 +20,7 @@ nothing for root, read-only mounts or ACLs).
 from __future__ import annotations
 
 import contextlib
+import fnmatch
 import hashlib
 import json
 import os
@@ -28,7 +29,7 @@ import signal
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -87,20 +88,37 @@ def check_output_file(path: str | Path, what: str = "output") -> Path:
     return p
 
 
-def check_output_dir(path: str | Path, what: str = "--out") -> Path:
+def check_output_dir(
+    path: str | Path, what: str = "--out", replaceable: Sequence[str] = ("*",)
+) -> Path:
     """Check, before any computation, that the folder ``path`` can be (re)written.
 
-    An existing ``path`` must be a directory; the folder that will hold it (or its
-    nearest existing ancestor) must accept new entries. Nothing is created.
+    An existing ``path`` must be a directory whose entries all match ``replaceable``
+    (glob patterns of the files the command writes: a folder holding anything else is
+    not replaced, so ``--out ~/Documents`` cannot delete a user's files); the folder that
+    will hold it (or its nearest existing ancestor) must accept new entries. Nothing is
+    created.
 
     Raises
     ------
     OutputError
-        Naming ``what`` and the path.
+        Naming ``what`` and the path (and the foreign entries).
     """
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise OutputError(f"{what}: {str(p)!r} exists and is not a directory")
+    if p.is_dir():
+        foreign = sorted(
+            e.name
+            for e in p.iterdir()
+            if not any(fnmatch.fnmatchcase(e.name, pat) for pat in replaceable) or e.is_dir()
+        )
+        if foreign:
+            shown = ", ".join(foreign[:5]) + (" ..." if len(foreign) > 5 else "")
+            raise OutputError(
+                f"{what}: {str(p)!r} holds {len(foreign)} entries this command does not write "
+                f"({shown}); it replaces the folder as a whole, so give a new or empty folder"
+            )
     _probe_writable(_existing_ancestor(p.parent), what)
     return p
 
@@ -175,10 +193,14 @@ class AtomicDirectory:
     ----------
     out : path
         The final folder; an existing one is replaced as a whole on :meth:`commit`.
+    replaceable : sequence of str
+        Glob patterns of the names an existing ``out`` may hold: a folder with any other
+        entry (or a subfolder) is refused before anything is written.
     """
 
-    def __init__(self, out: str | Path) -> None:
-        self.out = Path(out)
+    def __init__(self, out: str | Path, replaceable: Sequence[str] = ("*",)) -> None:
+        self.out = Path(os.path.abspath(out))
+        self.replaceable = tuple(replaceable)
         self.lock = self.out.parent / f".{self.out.name}.lock"
         self.tmp: Path | None = None
         self.committed = False
@@ -220,7 +242,7 @@ class AtomicDirectory:
 
     # ------------------------------------------------------------------ context
     def __enter__(self) -> Path:
-        check_output_dir(self.out)
+        check_output_dir(self.out, replaceable=self.replaceable)
         self._acquire()
         try:
             self.tmp = Path(

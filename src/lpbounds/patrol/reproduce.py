@@ -119,6 +119,15 @@ PAPER_TABLE1 = {
 #: 3.01 / 3.13, HiGHS's default (simplex): 7.47 / 5.08; LBLP 2.54 / 2.52, 2.55 / 2.51,
 #: 4.67 / 3.95. patrol-small: about 0.01 s in every configuration. IPM is what is fast.
 SOLVER_OPTIONS: dict[str, dict[str, Any]] = {"HIGHS": {"highs_options": {"solver": "ipm"}}}
+#: The names :func:`reproduce` writes: an existing ``out`` holding anything else is
+#: refused rather than replaced.
+OUTPUT_FILES: tuple[str, ...] = (
+    "summary.json",
+    "values.npz",
+    "report.md",
+    "manifest.json",
+    "fig*.png",
+)
 #: Paper, Section 5: the example's counts.
 PAPER_COUNTS = {"n_states": 2_048_000, "n_partitions": 8_900}
 
@@ -927,7 +936,7 @@ def reproduce(
     t_start = time.perf_counter()
     tr = Tracker(progress)
     outdir = Path(out)
-    target = AtomicDirectory(outdir)
+    target = AtomicDirectory(outdir, replaceable=OUTPUT_FILES)
     with target as tmp:
         built, counts = build_model(params, tr)
         vs = solve_vstar(built, tr)
