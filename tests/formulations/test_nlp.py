@@ -9,6 +9,7 @@ from exact DP (policy iteration of :func:`lpbounds.dp.solve_exact`).
 from __future__ import annotations
 
 import itertools
+import time
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lpbounds.dp import solve_exact
-from lpbounds.errors import SolverNotInstalledError, ValidationError
+from lpbounds.errors import ConvergenceError, SolverNotInstalledError, ValidationError
 from lpbounds.formulations import NLP
 from lpbounds.formulations.nlp_cuts import (
     CutGeneratingLP,
@@ -27,6 +28,7 @@ from lpbounds.formulations.nlp_cuts import (
 )
 from lpbounds.generators import garnet, random_partition
 from lpbounds.partition import Partition
+from lpbounds.status import Status
 
 #: methods that must agree with the reference to this (relative to max(1, max|w*|))
 AGREE_RTOL = 1e-9
@@ -35,7 +37,11 @@ BRACKET_RTOL = 1e-9
 
 
 def reference_w(mdp, partition, tol_rel: float = 1e-14) -> np.ndarray:
-    """Eq. 25's fixed point by plain loops over partitions, actions and member states."""
+    """Eq. 25's fixed point by plain loops over partitions, actions and member states.
+
+    A state of ``S_i`` at which ``u`` is forbidden has the term ``R_u(x) = -inf``, so the
+    min over ``S_i`` is ``-inf`` and ``(i, u)`` constrains nothing.
+    """
     labels = partition.labels
     m = partition.n_partitions
     probs = mdp.probabilities_full()
@@ -51,13 +57,13 @@ def reference_w(mdp, partition, tol_rel: float = 1e-14) -> np.ndarray:
                 worst = np.inf
                 for x in members[i]:
                     if not mdp.allowed[x, u]:
-                        continue
+                        worst = -np.inf  # u forbidden at x: R_u(x) = -inf, the min is -inf
+                        break
                     q = mdp.rewards[x, u]
                     for k, p in zip(mdp.successors[x, u], probs[x, u], strict=True):
                         q += lam * p * w[labels[k]]
                     worst = min(worst, q)
-                if worst < np.inf:
-                    best_u = max(best_u, worst)
+                best_u = max(best_u, worst)
             new[i] = best_u
         diff = np.abs(new - w).max()
         w = new
@@ -117,7 +123,7 @@ def test_singleton_partition_gives_v_star():
 
 
 def test_disallowed_actions():
-    """Pairs that are not allowed contribute no term (reference: min over allowed x only)."""
+    """(i, u) counts only if u is allowed at every state of S_i (reference: -inf term)."""
     mdp = garnet(15, 3, 2, 0.9, seed=5, allowed_fraction=0.6)
     part = random_partition(15, 4, seed=5)
     ref = reference_w(mdp, part)
@@ -206,15 +212,85 @@ def test_cutting_planes_bracket_valid_on_harder_instances(spec):
     assert all(b >= a for a, b in itertools.pairwise(lows)), lows
 
 
-def test_cutting_planes_stall_is_reported():
-    """A run stopped at its round limit says so (converged False, reason, final gap > 0)."""
-    mdp, part = instance(12, 2, 3, 4, 2)
+def test_cutting_planes_stop_at_round_limit_is_reported():
+    """A run stopped at its round limit says so: ITERATION_LIMIT, bracket kept and valid."""
+    mdp, part = instance(15, 2, 2, 4, 0)
     nlp = NLP(mdp, part)
+    ref = reference_w(mdp, part)
     r = nlp.solve("cutting-planes", max_iter=3, cuts_per_round=1)
-    assert not r.converged and r.stop_reason == "max_rounds" and r.gap > 0, r.summary()
-    _check_bracket_every_round(nlp, r, reference_w(mdp, part))
-    with pytest.raises(Exception, match="NOT converged"):
+    assert r.stop_reason == "max_rounds" and r.iterations == 3, r.summary()
+    assert r.status is Status.ITERATION_LIMIT and not r.converged, r.summary()
+    lo, hi = r.extra["method_bracket"]
+    assert hi - lo > 1.0 and r.gap > 1.0, "the bracket is still open after 3 rounds"
+    _check_bracket_every_round(nlp, r, ref)
+    _check_certified(nlp, r, ref)
+    with pytest.raises(ConvergenceError, match="NOT converged"):
         nlp.solve("cutting-planes", max_iter=3, cuts_per_round=1, raise_on_failure=True)
+
+
+def _check_certified(nlp, r, ref):
+    """lower_values <= w* <= upper_values and the bracket on c'w* contains c'w* (ref's
+    own error, ~1e-14 relative, is the only slack)."""
+    slack = 1e-12 * max(1.0, np.abs(ref).max())
+    assert (r.lower_values <= ref + slack).all(), f"{r.method}: lower_values above w*"
+    assert (ref - slack <= r.upper_values).all(), f"{r.method}: upper_values below w*"
+    opt = float(nlp.cost @ ref)
+    s = slack * float(nlp.cost.sum())
+    assert r.lower_bound <= opt + s and opt - s <= r.upper_bound, (r.lower_bound, opt)
+
+
+@pytest.mark.parametrize("method", ["fixed-point", "strategy-iteration"])
+def test_iteration_limit_keeps_a_certified_bracket(method):
+    mdp, part = instance(30, 3, 3, 6, 3)
+    nlp = NLP(mdp, part)
+    ref = reference_w(mdp, part)
+    r = nlp.solve(method, max_iter=1 if method == "strategy-iteration" else 3)
+    assert r.status is Status.ITERATION_LIMIT and not r.converged, r.summary()
+    assert r.stop_reason == "max_iter"
+    assert r.gap > 1e-3, "one strategy / three sweeps do not close the bracket here"
+    _check_certified(nlp, r, ref)
+    full = nlp.solve(method)
+    assert full.status is Status.OPTIMAL and full.converged, full.summary()
+    _check_certified(nlp, full, ref)
+    # OPTIMAL means the certified bracket closed to gap_rtol in the problem's units
+    assert full.relative_gap <= full.gap_rtol, full.relative_gap
+
+
+def test_milp_honours_time_limit():
+    """Without a limit this MILP ran 178 s (HiGHS, measured); time_limit=5 stops it."""
+    mdp, part = instance(40, 3, 3, 8, 1)
+    nlp = NLP(mdp, part)
+    exact = nlp.solve("strategy-iteration")
+    t0 = time.perf_counter()
+    r = nlp.solve("milp", time_limit=5)
+    elapsed = time.perf_counter() - t0
+    assert elapsed <= 5 + 3, f"milp with time_limit=5 ran {elapsed:.1f} s"
+    assert r.status is Status.TIME_LIMIT and not r.converged, r.summary()
+    assert r.lower_bound <= exact.upper_bound and exact.lower_bound <= r.upper_bound
+    assert (r.lower_values <= exact.upper_values).all()
+    assert (exact.lower_values <= r.upper_values).all()
+
+
+def test_each_method_accepts_only_its_keywords():
+    mdp, part = instance(8, 2, 2, 3, 0)
+    nlp = NLP(mdp, part)
+    msg = "method 'milp' does not accept the keyword 'cuts_per_round'; it belongs to 'cutting"
+    with pytest.raises(ValidationError, match=msg):
+        nlp.solve("milp", cuts_per_round=3)
+    with pytest.raises(ValidationError, match="'fixed-point' does not accept the keyword 'time_"):
+        nlp.solve("fixed-point", time_limit=1.0)
+    with pytest.raises(ValidationError, match=r"'strategy-iteration' does not accept .*'solver'"):
+        nlp.solve("strategy-iteration", solver="HIGHS")
+    with pytest.raises(ValidationError, match="does not accept the keyword 'verbose'"):
+        nlp.solve("milp", verbose=True)  # solver options go in solver_options=
+    with pytest.raises(ValidationError, match="time_limit must be a finite number"):
+        nlp.solve("milp", time_limit=-1)
+    with pytest.raises(ValidationError, match="solver_options must be a dict"):
+        nlp.solve("milp", solver_options=["x"])
+    with pytest.raises(ValidationError, match="supports the solvers HIGHS and SCIPY"):
+        nlp.solve("milp", solver="CLARABEL", time_limit=1.0)
+    r = nlp.solve("milp", solver_options={"mip_rel_gap": 1e-9})
+    assert r.converged, r.summary()
 
 
 def test_persistent_master_matches_cold_solves():
@@ -287,7 +363,7 @@ def test_bad_input_errors():
         nlp.solve("cutting-planes", backend="gurobi")
     with pytest.raises(ValidationError, match="cuts_per_round must be >= 1"):
         nlp.solve("cutting-planes", cuts_per_round=0)
-    with pytest.raises(ValidationError, match="max_iter must be >= 1"):
+    with pytest.raises(ValidationError, match="max_iter must be an integer >= 1"):
         nlp.solve("strategy-iteration", max_iter=0)
     with pytest.raises(SolverNotInstalledError, match="unknown solver"):
         nlp.solve("milp", solver="NOSUCHSOLVER")

@@ -25,8 +25,9 @@ bracket ``lower_bound <= c'w* <= upper_bound`` and an iteration log:
 
 ``"cutting-planes"``
     Balas' disjunctive (lift-and-project) cuts on a master LP relaxation; every master
-    optimum is a certified lower bound, strategies read off the master points give the
-    upper bound. See :mod:`lpbounds.formulations.nlp_cuts` for the CGLP, its
+    optimum is a lower bound (weak duality: the log's lower side), strategies read off
+    the master points give the upper bound and the returned point (the incumbent).
+    See :mod:`lpbounds.formulations.nlp_cuts` for the CGLP, its
     normalisation and how each cut is made valid.
 ``"strategy-iteration"``
     Fix one term per disjunction (the minimiser's strategy ``sigma``), solve that row
@@ -39,19 +40,37 @@ bracket ``lower_bound <= c'w* <= upper_bound`` and an iteration log:
     ``a_t'w >= b_t - M_t (1 - z_t)`` with ``M_t = max(0, b_t - min_{lo <= w <= hi}
     a_t'w)`` (the term's largest possible violation on the box ``lo = min rho / (1 -
     lambda) <= w <= hi = max rho / (1 - lambda)``, which contains ``w*``). Solved with
-    cvxpy + HiGHS; the chosen strategy is then evaluated exactly.
+    cvxpy + HiGHS; the chosen strategy is then evaluated exactly. Under ``time_limit``
+    the solver gets the time left; without an incumbent the initial strategy's value
+    is returned (``TIME_LIMIT``, with its certified bracket).
 ``"fixed-point"``
     :func:`lpbounds.dp.solve_game`: value iteration on ``w = Gw``.
 
-Every result also carries ``residual = ||G w - w||_inf`` of its ``values`` and
-``error_bound = residual / (1 - lambda)``: ``w - error_bound <= w* <= w + error_bound``
-componentwise (``x = w - delta`` satisfies ``x <= Gx``, hence ``x <= w*``), so
-``lower_values`` is a certified lower bound on ``min_{S_i} V*``, whatever the method.
+**Action sets.** A disjunction ``(i, u)`` is kept only when ``u`` is allowed at every
+state of ``S_i``: a state that forbids ``u`` contributes the term ``R_u(x) = -inf`` to
+the min over ``S_i``, so the disjunction says nothing (the proof is "Action sets" in
+:mod:`lpbounds.rows`). The rule lives in ``aggregate(reduce="min")``, so all four methods
+see the same rows; a partition whose states share no allowed action would have the
+bound ``-inf`` and is refused with a :class:`~lpbounds.errors.ValidationError` naming it.
+
+**Certified results.** Whatever the method, the result's bounds come from the returned
+point ``w`` alone: :func:`lpbounds.certificate.certify` with the max-min operator ``G``
+(a ``lambda``-contraction, Fact 2) gives ``lower_values <= w* <= upper_values`` in
+floating point (contraction argument plus a derived rounding margin), hence
+``lower_values(i) <= min_{S_i} V*``; ``lower_bound``/``upper_bound`` on ``c'w*`` are
+``Certificate.objective_bracket(c)``. The cutting planes' master value and the MILP
+solver's dual bound are reported in ``extra["method_bracket"]`` and the log only: they
+are valid in exact arithmetic but not rounding-certified, so the reported
+``lower_values`` never use them. The status is ``OPTIMAL`` when the certified bracket is
+within ``gap_rtol`` of the problem's scale ``max|R| / (1 - lambda)``, a limit status
+(``TIME_LIMIT``, ``ITERATION_LIMIT``, ``LIMIT``) when a limit stopped the method first,
+``INACCURATE`` otherwise; ``converged`` is ``status is OPTIMAL``.
 """
 
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -61,21 +80,24 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
+from ..certificate import Certificate, certify
 from ..dp import _threads_for, solve_exact, solve_game
 from ..errors import ConvergenceError, SolverError, ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
+from ..status import Status
 from ..tolerances import NLP_GAP_RTOL, NLP_MILP_GAP_RTOL, NLP_SWITCH_RTOL, dp_scale
 from .base import aggregated_cost, resolve_solver
 
-__all__ = ["NLP", "NLPIteration", "NLPResult"]
+__all__ = ["METHOD_KEYWORDS", "NLP", "NLPIteration", "NLPResult"]
 
 Method = Literal["cutting-planes", "strategy-iteration", "milp", "fixed-point"]
 METHODS: tuple[str, ...] = ("cutting-planes", "strategy-iteration", "milp", "fixed-point")
 
 #: Exact solves (fixed points of strategies and of G) stop at this relative residual.
 _EXACT_RTOL = 1e-13
+_TINY = float(np.finfo(np.float64).tiny)
 
 
 @dataclass
@@ -96,6 +118,10 @@ class NLPIteration:
 class NLPResult:
     """The outcome of :meth:`NLP.solve`.
 
+    Every bound in it is certified from the returned point ``values`` alone
+    (:func:`lpbounds.certificate.certify` on the NLP's min-rows with the max-min operator
+    ``G``), whatever the method or solver claimed.
+
     Attributes
     ----------
     formulation : str
@@ -103,26 +129,36 @@ class NLPResult:
     method : str
     values : ndarray (M,)
         The method's point: ``w*`` up to ``error_bound`` (for the cutting planes, the best
-        feasible point found, the incumbent of the upper bound).
+        feasible point found, the incumbent of the upper bound; for the MILP the value of
+        its strategy).
     state_values : ndarray (n,)
         ``Phi values``.
-    lower_values : ndarray (M,)
-        ``values - error_bound``: certified ``<= w*(i) <= min_{x in S_i} V*(x)``.
+    lower_values, upper_values : ndarray (M,)
+        The certificate's bracket: ``lower_values <= w* <= upper_values`` in floating
+        point, hence ``lower_values(i) <= min_{x in S_i} V*(x)``. Taken from the
+        certificate only (never from a solver's objective or a cutting-plane master).
     lower_bound, upper_bound : float
-        The method's bracket on ``c'w*`` (``-inf``/``inf`` if it has no such side).
+        ``Certificate.objective_bracket(cost)``: a certified bracket on ``c'w*``.
     gap : float
         ``upper_bound - lower_bound``.
-    converged : bool
-        Whether the method reached its stopping rule (for the cutting planes: the gap
-        closed to ``gap_rtol``); ``False`` means stalled or stopped at a limit, see
-        ``stop_reason``.
+    status : lpbounds.status.Status
+        ``OPTIMAL`` when the certified bracket closed to the requested gap: the computed
+        residual ``||G values - values||_inf <= gap_rtol / 2 * max|R|``, so that
+        ``max(upper_values - lower_values) <= gap_rtol * scale`` up to the certificate's
+        rounding margin (``Certificate.is_accurate``); ``TIME_LIMIT`` /
+        ``ITERATION_LIMIT`` / ``LIMIT`` when a limit stopped the method first (the point
+        and its bracket are kept); ``INACCURATE`` when the method stopped on its own with
+        a wider bracket (for example cutting planes that found no cut).
     stop_reason : str
+        The method's own reason, for humans.
     objective : float
         ``c'values``.
     residual : float
-        ``||G values - values||_inf``.
+        ``||G values - values||_inf`` as computed.
     error_bound : float
-        ``residual / (1 - discount)``: ``|values - w*| <= error_bound`` componentwise.
+        The certificate's ``||values - w*||_inf`` bound (contraction argument plus rounding
+        margin).
+    certificate : lpbounds.certificate.Certificate
     iterations : int
         Rounds (cutting planes), strategies evaluated (strategy iteration), value
         iterations (fixed point), 1 (MILP).
@@ -130,13 +166,18 @@ class NLPResult:
         Cuts added (cutting planes only).
     seconds : float
     log : list of NLPIteration
+        The method's own bracket per iteration (the cutting planes' master bound is not
+        rounding-certified; the final entry of the other methods is the certified one).
     cost : ndarray (M,)
         The partition cost ``c-bar``.
     solver : str
     gap_rtol : float
-        The relative gap the method was asked for (cutting planes).
+        The relative accuracy the method was asked for.
+    scale : float
+        ``max|R| / (1 - lambda)`` over the NLP's terms: the unit of ``gap_rtol``.
     extra : dict
-        Method-specific data (the cuts, the MILP's raw point and status, ...).
+        Method-specific data (``method_bracket``: the method's own bracket on ``c'w*``;
+        the cuts, the MILP's raw point and status, ...).
     """
 
     formulation: str
@@ -144,14 +185,16 @@ class NLPResult:
     values: np.ndarray
     state_values: np.ndarray
     lower_values: np.ndarray
+    upper_values: np.ndarray
     lower_bound: float
     upper_bound: float
     gap: float
-    converged: bool
+    status: Status
     stop_reason: str
     objective: float
     residual: float
     error_bound: float
+    certificate: Certificate
     iterations: int
     cuts: int
     seconds: float
@@ -159,21 +202,72 @@ class NLPResult:
     cost: np.ndarray
     solver: str
     gap_rtol: float
+    scale: float
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
+    def converged(self) -> bool:
+        """``status is Status.OPTIMAL`` (derived: the status is the one source of truth)."""
+        return self.status is Status.OPTIMAL
+
+    @property
     def relative_gap(self) -> float:
-        """``gap / max(1, |upper_bound|)``."""
-        return self.gap / max(1.0, abs(self.upper_bound))
+        """``gap / (sum(cost) * scale)``: the bracket on ``c'w*`` in the problem's units."""
+        unit = float(self.cost.sum()) * self.scale
+        return self.gap / unit if unit > 0 else (0.0 if self.gap <= 0 else float("inf"))
 
     def summary(self) -> str:
-        """One line: method, bracket, gap, rounds, cuts, time, convergence."""
+        """One line: method, status, bracket, gap, rounds, cuts, time."""
         return (
-            f"NLP[{self.method}] c'w* in [{self.lower_bound:.10g}, {self.upper_bound:.10g}] "
-            f"gap {self.gap:.3e} after {self.iterations} iterations, {self.cuts} cuts, "
-            f"{self.seconds:.3f} s; {'converged' if self.converged else 'NOT converged'} "
-            f"({self.stop_reason})"
+            f"NLP[{self.method}] {self.status}: c'w* in [{self.lower_bound:.10g}, "
+            f"{self.upper_bound:.10g}] gap {self.gap:.3e} after {self.iterations} iterations, "
+            f"{self.cuts} cuts, {self.seconds:.3f} s; "
+            f"{'converged' if self.converged else 'NOT converged'} ({self.stop_reason})"
         )
+
+
+#: The keywords of each method (besides ``gap_rtol``, ``progress`` and
+#: ``raise_on_failure``, which every method takes) and their defaults.
+METHOD_KEYWORDS: dict[str, dict[str, Any]] = {
+    "cutting-planes": {
+        "solver": "HIGHS",
+        "max_iter": 200,
+        "cuts_per_round": 10,
+        "backend": "highspy",
+        "time_limit": None,
+        "cglp_rows": "binding",
+        "normalization": "multipliers",
+        "solver_options": None,
+    },
+    "strategy-iteration": {"max_iter": 10_000, "time_limit": None},
+    "milp": {"solver": "HIGHS", "time_limit": None, "solver_options": None},
+    "fixed-point": {"max_iter": 100_000},
+}
+
+
+def _method_options(method: str, given: dict[str, Any]) -> dict[str, Any]:
+    """``given`` checked against ``method``'s keywords, with the defaults filled in."""
+    allowed = METHOD_KEYWORDS[method]
+    for key in given:
+        if key not in allowed:
+            owners = [m for m in METHODS if key in METHOD_KEYWORDS[m]]
+            where = f"; it belongs to {', '.join(map(repr, owners))}" if owners else ""
+            raise ValidationError(
+                f"NLP.solve: method {method!r} does not accept the keyword {key!r}{where}. "
+                f"{method!r} accepts: {', '.join(sorted(allowed))}, gap_rtol, progress, "
+                "raise_on_failure"
+            )
+    opts = {**allowed, **given}
+    mi = opts.get("max_iter")
+    if mi is not None and not (isinstance(mi, int | np.integer) and mi >= 1):
+        raise ValidationError(f"max_iter must be an integer >= 1; got {mi!r}")
+    tl = opts.get("time_limit")
+    if tl is not None and not (isinstance(tl, int | float) and np.isfinite(tl) and tl > 0):
+        raise ValidationError(f"time_limit must be a finite number of seconds > 0; got {tl!r}")
+    so = opts.get("solver_options")
+    if so is not None and not isinstance(so, dict):
+        raise ValidationError(f"solver_options must be a dict; got {type(so).__name__}")
+    return opts
 
 
 class NLP:
@@ -234,7 +328,10 @@ class NLP:
         self.disj_size = np.diff(self.disj_start)
         self.disj_of_row = np.repeat(np.arange(first.size), self.disj_size)
         lam = r.discount
-        self.box = (float(r.reward.min()) / (1 - lam), float(r.reward.max()) / (1 - lam))
+        # widened by a few ulps so that rounding in the division cannot exclude w*
+        lo, hi = float(r.reward.min()) / (1 - lam), float(r.reward.max()) / (1 - lam)
+        pad = 8 * np.finfo(np.float64).eps
+        self.box = (lo - pad * abs(lo) - _TINY, hi + pad * abs(hi) + _TINY)
         self.scale = dp_scale(float(np.abs(r.reward).max(initial=0.0)), lam)
         self._term_matrix: tuple[sp.csr_matrix, np.ndarray] | None = None
 
@@ -324,55 +421,60 @@ class NLP:
         self,
         method: Method = "cutting-planes",
         *,
-        solver: str = "HIGHS",
         gap_rtol: float = NLP_GAP_RTOL,
-        max_iter: int | None = None,
-        cuts_per_round: int = 10,
-        backend: str = "highspy",
-        time_limit: float | None = None,
-        cglp_rows: str = "binding",
-        normalization: str = "multipliers",
         progress: bool = False,
         raise_on_failure: bool = False,
-        **solver_options: Any,
+        **options: Any,
     ) -> NLPResult:
         """Solve the NLP with ``method``.
+
+        Each method accepts only its own keywords (:data:`METHOD_KEYWORDS`); any other
+        keyword is a :class:`~lpbounds.errors.ValidationError` naming it and the method.
 
         Parameters
         ----------
         method : {"cutting-planes", "strategy-iteration", "milp", "fixed-point"}
-        solver : str
-            LP/MILP solver through cvxpy ("HIGHS" default). The cutting planes with
-            ``backend="highspy"`` require HIGHS; strategy iteration and the fixed point
-            use no solver.
         gap_rtol : float
-            Cutting planes: stop when ``upper - lower <= gap_rtol * max(1, |upper|)``.
-        max_iter : int, optional
-            Rounds (cutting planes, default 200), strategies (strategy iteration, default
-            10,000) or value iterations (fixed point, default 100,000).
-        cuts_per_round : int
-            Cutting planes: at most this many cuts a round (the most violated
-            disjunctions first).
-        backend : {"highspy", "cvxpy"}
-            Cutting planes: a persistent HiGHS master (fast), or every LP cold through
-            cvxpy with ``solver``.
-        time_limit : float, optional
-            Cutting planes: stop after this many seconds.
-        cglp_rows : {"binding", "all"}
-            Cutting planes: the master rows the cut-generating LP is built on: the
-            single-term rows and the cuts binding at the master's point (default), or all
-            of them. Measured (docs/nlp.md): the same rounds and cuts on 3 of 4 instances,
-            and up to 4x less time, since the CGLP no longer grows with every cut.
-        normalization : {"multipliers", "alpha"}
-            Cutting planes: the CGLP's normalisation, ``sum(u) + sum(v) = 1`` (default)
-            or ``max|alpha| <= 1`` (see :func:`~lpbounds.formulations.nlp_cuts.cglp_data`).
+            Every method: the result is ``OPTIMAL`` when its certified bracket satisfies
+            ``max(upper_values - lower_values) <= gap_rtol * scale`` (up to the rounding
+            margin) with ``scale = max|R| / (1 - lambda)``: relative to the problem's
+            scale, so that rewards of 1e-6 are not "closed" by an absolute gap. The
+            cutting planes also stop when their own bracket on ``c'w*`` closes to
+            ``gap_rtol * sum(c) * scale``.
         progress : bool
             Show a rich progress bar (on stderr) with the bracket.
         raise_on_failure : bool
-            Raise :class:`~lpbounds.errors.ConvergenceError` when the method does not
-            converge (default: return with ``converged=False``).
-        **solver_options
-            Passed to the solver (cvxpy backends and the MILP).
+            Raise :class:`~lpbounds.errors.ConvergenceError` unless the status is
+            ``OPTIMAL`` (default: return the result with its status).
+        solver : str
+            ``"cutting-planes"``, ``"milp"``: the LP/MILP solver through cvxpy ("HIGHS"
+            default). The cutting planes with ``backend="highspy"`` require HIGHS.
+        max_iter : int
+            ``"cutting-planes"``: rounds (default 200); ``"strategy-iteration"``:
+            strategies (default 10,000); ``"fixed-point"``: value iterations (default
+            100,000). Reaching it gives ``ITERATION_LIMIT`` unless the bracket closed.
+        time_limit : float
+            ``"cutting-planes"``, ``"strategy-iteration"``, ``"milp"``: stop after about
+            this many seconds (``TIME_LIMIT``, with the best point and its certified
+            bracket). The MILP passes the time left to the solver (HIGHS or SCIPY; other
+            MILP solvers are refused) and, if the solver returns no incumbent, keeps the
+            value of the initial strategy.
+        cuts_per_round : int
+            ``"cutting-planes"``: at most this many cuts a round (the most violated
+            disjunctions first).
+        backend : {"highspy", "cvxpy"}
+            ``"cutting-planes"``: a persistent HiGHS master (fast), or every LP cold
+            through cvxpy with ``solver``.
+        cglp_rows : {"binding", "all"}
+            ``"cutting-planes"``: the master rows the cut-generating LP is built on: the
+            single-term rows and the cuts binding at the master's point (default), or all
+            of them (docs/nlp.md has the measurements).
+        normalization : {"multipliers", "alpha"}
+            ``"cutting-planes"``: the CGLP's normalisation, ``sum(u) + sum(v) = 1``
+            (default) or ``max|alpha| <= 1`` (see
+            :func:`~lpbounds.formulations.nlp_cuts.cglp_data`).
+        solver_options : dict
+            ``"cutting-planes"`` (cvxpy backend), ``"milp"``: passed to the solver.
 
         Returns
         -------
@@ -380,77 +482,73 @@ class NLP:
         """
         if method not in METHODS:
             raise ValidationError(f"unknown NLP method {method!r}; choose one of {METHODS}")
-        if not (gap_rtol >= 0 and np.isfinite(gap_rtol)):
-            raise ValidationError(f"gap_rtol must be a finite number >= 0; got {gap_rtol}")
-        if max_iter is not None and max_iter < 1:
-            raise ValidationError(f"max_iter must be >= 1; got {max_iter}")
+        if not (isinstance(gap_rtol, int | float) and np.isfinite(gap_rtol) and gap_rtol >= 0):
+            raise ValidationError(f"gap_rtol must be a finite number >= 0; got {gap_rtol!r}")
+        opts = _method_options(method, options)
         t0 = time.perf_counter()
-        with _progress_bar(progress, method, max_iter) as tick, _threads_for(self.rows):
+        with _progress_bar(progress, method, opts.get("max_iter")) as tick, _threads_for(self.rows):
             if method == "cutting-planes":
-                out = self._cutting_planes(
-                    solver,
-                    gap_rtol,
-                    max_iter or 200,
-                    cuts_per_round,
-                    backend,
-                    time_limit,
-                    cglp_rows,
-                    normalization,
-                    tick,
-                    solver_options,
-                )
+                out = self._cutting_planes(opts, gap_rtol, tick)
             elif method == "strategy-iteration":
-                out = self._strategy_iteration(max_iter or 10_000, tick)
+                out = self._strategy_iteration(opts["max_iter"], opts["time_limit"], tick)
             elif method == "milp":
-                out = self._milp(solver, tick, solver_options)
+                out = self._milp(opts["solver"], opts["time_limit"], opts["solver_options"], tick)
             else:
-                out = self._fixed_point(max_iter or 100_000, tick)
-        out.seconds = time.perf_counter() - t0
-        out.gap_rtol = gap_rtol
-        if raise_on_failure and not out.converged:
-            raise ConvergenceError(out.summary())
-        return out
+                out = self._fixed_point(opts["max_iter"], tick)
+        result = self._result(method, out, gap_rtol, time.perf_counter() - t0)
+        if raise_on_failure and not result.converged:
+            raise ConvergenceError(result.summary())
+        return result
 
     # ------------------------------------------------------------------ helpers
-    def _result(self, method: str, values: np.ndarray, **kw: Any) -> NLPResult:
-        values = np.asarray(values, dtype=np.float64)
-        res = self.residual(values)
-        err = res / (1 - self.rows.discount)
-        lower = kw.pop("lower_bound", -np.inf)
-        upper = kw.pop("upper_bound", np.inf)
+    def certify(self, w: Any) -> Certificate:
+        """The certified bracket on ``w*`` from any point ``w`` (max-min operator ``G``)."""
+        return certify(self.rows, w, operator="maxmin")
+
+    def _result(self, method: str, out: _Outcome, gap_rtol: float, seconds: float) -> NLPResult:
+        values = np.asarray(out.values, dtype=np.float64)
+        cert = self.certify(values)
+        lo, hi = cert.objective_bracket(self.cost)
+        # width = 2 (residual + margin) / (1 - kappa): a residual within gap_rtol / 2 of
+        # max|R| closes the bracket to gap_rtol max|R| / (1 - kappa) plus the rounding margin
+        if cert.is_accurate(gap_rtol / 2):
+            status = Status.OPTIMAL
+        else:
+            status = out.limit if out.limit is not None else Status.INACCURATE
+        if out.log and not out.keep_log_bracket:
+            out.log[-1].lower, out.log[-1].upper, out.log[-1].gap = lo, hi, hi - lo
         return NLPResult(
             formulation="NLP",
             method=method,
             values=values,
             state_values=self.partition.lift(values),
-            lower_values=values - err,
-            lower_bound=float(lower),
-            upper_bound=float(upper),
-            gap=float(upper - lower),
+            lower_values=cert.lower,
+            upper_values=cert.upper,
+            lower_bound=lo,
+            upper_bound=hi,
+            gap=hi - lo,
+            status=status,
+            stop_reason=out.stop_reason,
             objective=float(self.cost @ values),
-            residual=res,
-            error_bound=err,
+            residual=cert.residual,
+            error_bound=cert.error_bound,
+            certificate=cert,
+            iterations=out.iterations,
+            cuts=out.cuts,
+            seconds=seconds,
+            log=out.log,
             cost=self.cost,
-            seconds=0.0,
-            gap_rtol=np.nan,
-            **kw,
+            solver=out.solver,
+            gap_rtol=gap_rtol,
+            scale=self.scale,
+            extra=out.extra,
         )
 
-    def _residual_bracket(self, w: np.ndarray) -> tuple[float, float, np.ndarray]:
-        """Porteus bounds of ``c'w*`` from one application of ``G`` at ``w``.
-
-        With ``r = Gw - w``: ``Gw + lambda min r / (1 - lambda) <= w* <= Gw + lambda max r
-        / (1 - lambda)`` componentwise (``G`` is monotone and ``G(w + k) = Gw + lambda k``).
-        """
-        gw = self.game_operator(w)
-        r = gw - w
-        k = self.rows.discount / (1 - self.rows.discount)
-        base = float(self.cost @ gw)
-        s = float(self.cost.sum())
-        return base + s * k * float(r.min()), base + s * k * float(r.max()), gw
+    def _limit(self, t0: float, time_limit: float | None) -> bool:
+        return time_limit is not None and time.perf_counter() - t0 >= time_limit
 
     # ------------------------------------------------------------------ methods
-    def _fixed_point(self, max_iter: int, tick: Callable[..., None]) -> NLPResult:
+    def _fixed_point(self, max_iter: int, tick: Callable[..., None]) -> _Outcome:
         t0 = time.perf_counter()
         log: list[NLPIteration] = []
         s = float(self.cost.sum())
@@ -471,31 +569,25 @@ class NLP:
             callback=cb,
             raise_on_failure=False,
         )
-        lo, hi, _ = self._residual_bracket(dp.values)
-        if log:
-            log[-1].lower, log[-1].upper, log[-1].gap = lo, hi, hi - lo
-        return self._result(
-            "fixed-point",
+        return _Outcome(
             dp.values,
-            lower_bound=lo,
-            upper_bound=hi,
-            converged=dp.converged,
             stop_reason="residual <= tol" if dp.converged else "max_iter",
+            limit=None if dp.converged else Status.ITERATION_LIMIT,
             iterations=dp.iterations,
-            cuts=0,
             log=log,
             solver="none (value iteration)",
             extra={"tol": dp.tol, "sweeps": dp.sweeps},
         )
 
-    def _strategy_iteration(self, max_iter: int, tick: Callable[..., None]) -> NLPResult:
+    def _strategy_iteration(
+        self, max_iter: int, time_limit: float | None, tick: Callable[..., None]
+    ) -> _Outcome:
         t0 = time.perf_counter()
         log: list[NLPIteration] = []
         sel = self.best_terms(np.full(self.rows.n_vars, self.box[1]))
         upper = np.inf
-        converged = False
         v = np.full(self.rows.n_vars, self.box[1])
-        it = 0
+        stop, limit, it = "max_iter", Status.ITERATION_LIMIT, 0
         for it in range(1, max_iter + 1):
             v, ub = self.strategy_upper_bound(sel)
             upper = min(upper, ub)
@@ -504,130 +596,127 @@ class NLP:
             log.append(e)
             tick(e)
             if np.array_equal(new, sel):
-                converged = True
+                stop, limit = "strategy stable", None
+                break
+            if self._limit(t0, time_limit):
+                stop, limit = "time_limit", Status.TIME_LIMIT
                 break
             sel = new
-        lo, hi, _ = self._residual_bracket(v)
-        upper = min(upper, hi)
-        log[-1].lower, log[-1].upper, log[-1].gap = lo, upper, upper - lo
-        return self._result(
-            "strategy-iteration",
+        return _Outcome(
             v,
-            lower_bound=lo,
-            upper_bound=upper,
-            converged=converged,
-            stop_reason="strategy stable" if converged else "max_iter",
+            stop_reason=stop,
+            limit=limit,
             iterations=it,
-            cuts=0,
             log=log,
             solver="none (exact evaluation)",
             extra={"strategy": sel},
         )
 
-    def _milp(self, solver: str, tick: Callable[..., None], options: dict[str, Any]) -> NLPResult:
+    def _milp(
+        self,
+        solver: str,
+        time_limit: float | None,
+        solver_options: dict[str, Any] | None,
+        tick: Callable[..., None],
+    ) -> _Outcome:
         t0 = time.perf_counter()
         name = resolve_solver(solver)
-        # a feasible point bounds w* from above (Fact 2): it shrinks the box and the big-Ms
-        v0, _ = self.strategy_value(self.best_terms(np.full(self.rows.n_vars, self.box[1])))
-        r0 = float((self.game_operator(v0) - v0).max())
-        upper = v0 + max(r0, 0.0) / (1 - self.rows.discount)  # >= w*: (G - I) at it <= 0
-        model = NLPMILP(self, upper=upper)
-        opts = dict(options)
+        opts = dict(solver_options or {})
+        # a feasible point bounds w* from above (Fact 2): it shrinks the box and the big-Ms;
+        # the certificate's upper side is >= w* in floating point
+        sel0 = self.best_terms(np.full(self.rows.n_vars, self.box[1]))
+        v0, _ = self.strategy_value(sel0)
+        model = NLPMILP(self, upper=self.certify(v0).upper)
         if name == "HIGHS":
             opts.setdefault("mip_rel_gap", NLP_MILP_GAP_RTOL)
             opts.setdefault("mip_abs_gap", NLP_MILP_GAP_RTOL * self.scale)
+        if time_limit is not None:
+            _set_time_limit(name, opts, max(time_limit - (time.perf_counter() - t0), 1e-3))
         try:
-            model.problem.solve(solver=name, **opts)
+            with warnings.catch_warnings():
+                # cvxpy warns on a limit or an inaccurate solve; the point is certified below
+                warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
+                model.problem.solve(solver=name, **opts)
         except cp.SolverError as exc:
             raise SolverError(f"NLP milp with {name}: {exc}") from exc
-        if model.problem.status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-            raise SolverError(f"NLP milp with {name}: status {model.problem.status}")
-        w_raw = np.asarray(model.w.value, dtype=np.float64)
-        z = np.asarray(model.z.value, dtype=np.float64) if model.z is not None else np.zeros(0)
-        # the MILP's strategy: per multi-term disjunction the term with the largest z
-        sel = self.disj_start[:-1].copy()
-        multi = np.flatnonzero(self.disj_size >= 2)
-        if multi.size:
-            zz = np.full(self.rows.n_rows, -np.inf)
-            zz[model.multi_rows] = z
-            best = np.maximum.reduceat(zz, self.disj_start[:-1])
-            is_best = zz >= best[self.disj_of_row]
-            idx = np.flatnonzero(is_best)
-            _, first = np.unique(self.disj_of_row[idx], return_index=True)
-            sel = idx[first]
+        status = model.problem.status
+        if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE, cp.USER_LIMIT):
+            raise SolverError(f"NLP milp with {name}: status {status}")
+        sel = sel0 if model.w.value is None else self._milp_strategy(model)
         v, ub = self.strategy_upper_bound(sel)
-        # the bracket: the solver's MIP dual bound is not passed on by cvxpy for HiGHS (and
-        # is only as good as its tolerances), so both sides come from the polished point:
-        # its strategy's value (upper) and the Porteus bounds of G at it (module docstring)
-        stats = model.problem.solver_stats
-        extra = getattr(stats, "extra_stats", None)
-        dual_bound = np.nan
-        if isinstance(extra, dict) and "mip_dual_bound" in extra:  # e.g. SCIPY
-            dual_bound = float(extra["mip_dual_bound"])
-        lower, hi, _ = self._residual_bracket(v)
-        upper = min(ub, hi)
-        e = NLPIteration(1, lower, upper, upper - lower, 0, time.perf_counter() - t0)
+        limit = None
+        if status == cp.USER_LIMIT:
+            limit = Status.TIME_LIMIT if self._limit(t0, time_limit) else Status.LIMIT
+        stats = getattr(model.problem.solver_stats, "extra_stats", None)
+        dual_bound = _mip_dual_bound(stats)
+        e = NLPIteration(1, dual_bound, ub, ub - dual_bound, 0, time.perf_counter() - t0)
         tick(e)
-        return self._result(
-            "milp",
+        return _Outcome(
             v,
-            lower_bound=lower,
-            upper_bound=upper,
-            converged=model.problem.status == cp.OPTIMAL,
-            stop_reason=str(model.problem.status),
+            stop_reason=str(status) if limit is None else f"{status} ({limit})",
+            limit=limit,
             iterations=1,
-            cuts=0,
             log=[e],
             solver=name,
             extra={
-                "w_milp": w_raw,
-                "milp_objective": float(model.problem.value),
+                "w_milp": None if model.w.value is None else np.asarray(model.w.value, float),
+                "milp_status": str(status),
+                "milp_objective": float(model.problem.value)
+                if model.w.value is not None
+                else np.nan,
                 "mip_dual_bound": dual_bound,
                 "strategy": sel,
                 "big_m": model.big_m,
+                "method_bracket": (dual_bound, ub),
             },
         )
 
+    def _milp_strategy(self, model: NLPMILP) -> np.ndarray:
+        """Per multi-term disjunction the term with the largest ``z`` (others: their term)."""
+        sel = self.disj_start[:-1].copy()
+        if model.z is None:
+            return sel
+        z = np.asarray(model.z.value, dtype=np.float64)
+        zz = np.full(self.rows.n_rows, -np.inf)
+        zz[model.multi_rows] = z
+        best = np.maximum.reduceat(zz, self.disj_start[:-1])
+        idx = np.flatnonzero(zz >= best[self.disj_of_row])
+        _, first = np.unique(self.disj_of_row[idx], return_index=True)
+        return idx[first]
+
     def _cutting_planes(
-        self,
-        solver: str,
-        gap_rtol: float,
-        max_rounds: int,
-        cuts_per_round: int,
-        backend: str,
-        time_limit: float | None,
-        cglp_rows: str,
-        normalization: str,
-        tick: Callable[..., None],
-        options: dict[str, Any],
-    ) -> NLPResult:
+        self, opts: dict[str, Any], gap_rtol: float, tick: Callable[..., None]
+    ) -> _Outcome:
         from .nlp_cuts import cutting_planes
 
+        backend = opts["backend"]
         out = cutting_planes(
             self,
-            solver=solver,
+            solver=opts["solver"],
             backend=backend,
             gap_rtol=gap_rtol,
-            max_rounds=max_rounds,
-            cuts_per_round=cuts_per_round,
-            time_limit=time_limit,
-            cglp_rows=cglp_rows,
-            normalization=normalization,
+            max_rounds=opts["max_iter"],
+            cuts_per_round=opts["cuts_per_round"],
+            time_limit=opts["time_limit"],
+            cglp_rows=opts["cglp_rows"],
+            normalization=opts["normalization"],
             on_round=tick,
-            **options,
+            **(opts["solver_options"] or {}),
         )
-        return self._result(
-            "cutting-planes",
+        limits = {"max_rounds": Status.ITERATION_LIMIT, "time_limit": Status.TIME_LIMIT}
+        return _Outcome(
             out.best_point,
-            lower_bound=out.lower,
-            upper_bound=out.upper,
-            converged=out.converged,
             stop_reason=out.stop_reason,
+            limit=limits.get(out.stop_reason),
             iterations=out.rounds,
             cuts=out.cuts,
             log=out.log,
-            solver="HIGHS (highspy, persistent)" if backend == "highspy" else f"{solver} (cvxpy)",
+            keep_log_bracket=True,
+            solver="HIGHS (highspy, persistent)"
+            if backend == "highspy"
+            else f"{opts['solver']} (cvxpy)",
             extra={
+                "method_bracket": (out.lower, out.upper),
                 "cut_alpha": out.cut_alpha,
                 "cut_beta": out.cut_beta,
                 "master_point": out.master_point,
@@ -636,6 +725,45 @@ class NLP:
                 "box": self.box,
             },
         )
+
+
+@dataclass
+class _Outcome:
+    """What a method hands to :meth:`NLP._result`: its point and why it stopped."""
+
+    values: np.ndarray
+    stop_reason: str
+    limit: Status | None  # the limit that stopped the method, None if it stopped on its own
+    iterations: int
+    log: list[NLPIteration]
+    solver: str
+    cuts: int = 0
+    keep_log_bracket: bool = False  # the cutting planes' log holds the master's bracket
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def _set_time_limit(solver: str, opts: dict[str, Any], seconds: float) -> None:
+    """Put a time limit into a MILP solver's cvxpy options (HIGHS and SCIPY only)."""
+    if solver == "HIGHS":
+        opts["time_limit"] = float(seconds)
+    elif solver == "SCIPY":
+        sc = dict(opts.get("scipy_options", {}))
+        sc["time_limit"] = float(seconds)
+        opts["scipy_options"] = sc
+    else:
+        raise ValidationError(
+            f"NLP.solve('milp', time_limit=...) supports the solvers HIGHS and SCIPY; got "
+            f"{solver!r} (set its own limit through solver_options)"
+        )
+
+
+def _mip_dual_bound(stats: Any) -> float:
+    """The solver's MIP dual bound when cvxpy passes it on (not certified), else ``-inf``."""
+    for key in ("mip_dual_bound",):
+        val = stats.get(key) if isinstance(stats, dict) else getattr(stats, key, None)
+        if val is not None and np.isfinite(float(val)):
+            return float(val)
+    return -np.inf
 
 
 class NLPMILP:

@@ -590,6 +590,9 @@ def cutting_planes(
     n_single = single.size
     be.start_master(master_data(c, a_all[single], b_all[single], lo, hi))
     scale = nlp.scale
+    # the gap is measured in the problem's units, sum(c) max|R| / (1 - lambda): an absolute
+    # max(1, |upper|) would call a 10 % gap closed when the rewards are of order 1e-6
+    gap_unit = gap_rtol * float(c.sum()) * scale
     viol_tol = NLP_VIOLATION_RTOL * scale
     depth_tol = NLP_CUT_MIN_DEPTH_RTOL * scale
     starts, sizes = nlp.disj_start, nlp.disj_size
@@ -626,7 +629,7 @@ def cutting_planes(
         viol = np.minimum.reduceat(q, starts[:-1]) - wbar[nlp.disj_owner]
         cand = multi[viol[multi] > viol_tol]
         cand = cand[np.argsort(-viol[cand], kind="stable")][:cuts_per_round]
-        done = gap <= gap_rtol * max(1.0, abs(upper))
+        done = gap <= gap_unit
         new_a: list[np.ndarray] = []
         new_b: list[float] = []
         if not done:
