@@ -305,6 +305,14 @@ class LBLP(_PatrolLP):
     violate; see the project's report for what is measured. Built from the partitions
     alone (:func:`patrol_rows` with ``"lower"``); cost-independent optimum (Fact 1),
     :meth:`fixed_point` computes it without a solver.
+
+    Action sets: the NLP keeps a disjunction ``(i, u)`` only when ``u`` is allowed at
+    every state of ``S_i`` ("Action sets" in :mod:`lpbounds.rows`). The patrol model
+    forbids loitering at an empty station, but whether loitering is allowed depends only
+    on ``(l, d, A_l)``, which the partition key fixes; so every state of ``S_i`` has the
+    same actions, the rule drops nothing, and LBLP's rows (one per allowed (partition,
+    action)) are those of the masked NLP. Checked state by state against the full MDP
+    and against ``NLP`` on ``models/patrol-small.toml`` in the tests.
     """
 
     name = "LBLP"
