@@ -22,6 +22,13 @@ its optimum, for every ``c >= 0``, is the reduced MDP's value
 Lemma 2: for an optimal dual ``mu-bar`` of RLP, ``SLP(mu-bar) = RLP``, and the reduced
 MDP's value is RLP's ``v*`` (:meth:`SLP.from_rlp`).
 
+Action sets need no special rule here (unlike the disjunctive NLP, whose ``(i, u)`` is
+kept only when ``u`` is allowed at every state of ``S_i``; see "Action sets" in
+:mod:`lpbounds.rows`): ``mu`` must vanish on disallowed pairs (checked), so each
+surrogate row combines only RLP rows that exist, and ``u in U_i`` as soon as *some* state
+of ``S_i`` allows ``u`` with positive weight. That keeps ``SLP(mu)`` a relaxation of RLP
+for every ``mu`` and keeps Lemma 2 (RLP's pair duals are zero on disallowed pairs).
+
 .. warning::
    For an arbitrary ``mu`` the SLP is only a relaxation of RLP: its optimum is
    *below* ``v*`` and is **not** an upper bound on ``V*`` in general. In particular
