@@ -256,16 +256,22 @@ def test_iteration_limit_keeps_a_certified_bracket(method):
     assert full.relative_gap <= full.gap_rtol, full.relative_gap
 
 
-def test_milp_honours_time_limit():
+@pytest.mark.parametrize("solver", ["HIGHS", "SCIPY"])
+def test_milp_honours_time_limit(solver):
     """Without a limit this MILP ran 178 s (HiGHS, measured); time_limit=5 stops it."""
     mdp, part = instance(40, 3, 3, 8, 1)
     nlp = NLP(mdp, part)
     exact = nlp.solve("strategy-iteration")
     t0 = time.perf_counter()
-    r = nlp.solve("milp", time_limit=5)
+    r = nlp.solve("milp", solver=solver, time_limit=5)
     elapsed = time.perf_counter() - t0
     assert elapsed <= 5 + 3, f"milp with time_limit=5 ran {elapsed:.1f} s"
-    assert r.status is Status.TIME_LIMIT and not r.converged, r.summary()
+    assert "time_limit" in r.stop_reason, r.summary()
+    # the status is judged from the point: TIME_LIMIT, or OPTIMAL when the incumbent found
+    # in time is certified optimal (HiGHS sometimes finds w*'s strategy within 5 s)
+    assert r.status in (Status.TIME_LIMIT, Status.OPTIMAL), r.summary()
+    if r.converged:
+        assert r.relative_gap <= 1.01 * r.gap_rtol, r.summary()
     assert r.lower_bound <= exact.upper_bound and exact.lower_bound <= r.upper_bound
     assert (r.lower_values <= exact.upper_values).all()
     assert (exact.lower_values <= r.upper_values).all()

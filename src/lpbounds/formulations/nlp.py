@@ -644,9 +644,15 @@ class NLP:
             raise SolverError(f"NLP milp with {name}: status {status}")
         sel = sel0 if model.w.value is None else self._milp_strategy(model)
         v, ub = self.strategy_upper_bound(sel)
+        # cvxpy reports a time limit as USER_LIMIT (HIGHS) or OPTIMAL_INACCURATE (SCIPY): a
+        # non-optimal stop after 90 % of the time limit is taken as the limit
         limit = None
-        if status == cp.USER_LIMIT:
-            limit = Status.TIME_LIMIT if self._limit(t0, time_limit) else Status.LIMIT
+        if status != cp.OPTIMAL and self._limit(
+            t0, None if time_limit is None else 0.9 * time_limit
+        ):
+            limit = Status.TIME_LIMIT
+        elif status == cp.USER_LIMIT:
+            limit = Status.LIMIT
         stats = getattr(model.problem.solver_stats, "extra_stats", None)
         dual_bound = _mip_dual_bound(stats)
         e = NLPIteration(1, dual_bound, ub, ub - dual_bound, 0, time.perf_counter() - t0)
