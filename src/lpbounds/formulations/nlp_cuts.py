@@ -3,6 +3,13 @@ r"""Balas' disjunctive cutting planes for the NLP (eq. 25): master LP, cut-gener
 The NLP's feasible set is ``F = {w : w(i) >= min_{t in (i,u)} q_t(w) for every (i, u)}``
 with ``q_t(w) = rho_t + lambda sum_l p_{t,l} w(k_{t,l})``; each (i, u) with ``T >= 2``
 terms is the disjunction ``OR_t  a_t'w >= b_t`` (``a_t = e_i - lambda P_t``, ``b_t = rho_t``).
+The (i, u) are those of ``nlp.rows``: with action sets, only the ``u`` allowed at every
+state of ``S_i`` ("Action sets" in :mod:`lpbounds.rows`), so the master, the CGLP and the
+box ``[min rho, max rho] / (1 - lambda)`` are all built from the masked rows.
+
+The loop's own bracket (master bound, strategy values) is reported in the log and in
+``NLPResult.extra["method_bracket"]``; the result's certified bounds come from the
+returned incumbent alone (:meth:`lpbounds.formulations.nlp.NLP.certify`).
 
 Master LP (a relaxation of ``F`` intersected with the box, valid for ``w*``)
     ``min c'w  s.t.  G w >= h,  lo <= w <= hi`` where ``G w >= h`` holds the (i, u) with a
