@@ -56,6 +56,9 @@ def _run(out: Path, env_extra: dict[str, str]) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
         env=env,
+        # SIGINT as in a terminal, even when the suite itself runs as a background job
+        # (which starts its children with SIGINT ignored)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
 
 
