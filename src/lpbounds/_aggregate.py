@@ -13,10 +13,12 @@ rows, so the result never depends on the hash.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit, prange
 
-_OPTS = {"cache": True, "nogil": True}
+_OPTS: dict[str, Any] = {"cache": True, "nogil": True}
 
 
 @njit(parallel=True, **_OPTS)

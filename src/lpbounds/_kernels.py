@@ -10,10 +10,12 @@ These are the fast paths; :mod:`tests.test_kernels` checks each against plain nu
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit, prange
 
-_OPTS = {"cache": True, "nogil": True, "fastmath": False}
+_OPTS: dict[str, Any] = {"cache": True, "nogil": True, "fastmath": False}
 
 
 @njit(parallel=True, **_OPTS)

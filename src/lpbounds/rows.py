@@ -343,6 +343,7 @@ class BellmanRows:
                 )
                 g_t, g_p = g_t[keep], g_p[keep]
             _check_every_partition_kept(mdp, partition, g_owner)
+        assert exact.pair_row is not None  # exact rows of an MDP carry the pair map
         pair_row = np.full(exact.pair_row.shape, -1, dtype=np.int64)
         allowed = exact.pair_row >= 0
         pair_row[allowed] = group[exact.pair_row[allowed]]

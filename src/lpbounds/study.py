@@ -52,7 +52,7 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -746,7 +746,7 @@ def _run_dask(tasks: list[Any], scheduler: str | Any) -> Iterable[list[dict[str,
             "--scheduler needs dask.distributed: pip install 'lpbounds[study]'"
         ) from exc
     own = not isinstance(scheduler, Client)
-    client = Client(scheduler) if own else scheduler
+    client = Client(scheduler) if own else cast(Client, scheduler)
     try:
         futures = client.map(run_task, tasks, pure=False)
         for fut in as_completed(futures):

@@ -186,6 +186,7 @@ class LLP(Formulation):
         a_rows, _ = rows.constraint_matrix()
         self.pairs = np.argwhere(mdp.allowed)  # (x, u) of each z entry, row-major
         xs, us = self.pairs[:, 0], self.pairs[:, 1]
+        assert rows.pair_row is not None  # rows built from an MDP carry the pair map
         a_pair = a_rows[rows.pair_row[xs, us]]  # row of pair (x,u) with ITS reward below
         b_pair = mdp.rewards[xs, us]
         k = xs.size

@@ -587,7 +587,8 @@ class NLP:
         sel = self.best_terms(np.full(self.rows.n_vars, self.box[1]))
         upper = np.inf
         v = np.full(self.rows.n_vars, self.box[1])
-        stop, limit, it = "max_iter", Status.ITERATION_LIMIT, 0
+        limit: Status | None = Status.ITERATION_LIMIT
+        stop, it = "max_iter", 0
         for it in range(1, max_iter + 1):
             v, ub = self.strategy_upper_bound(sel)
             upper = min(upper, ub)

@@ -251,7 +251,7 @@ class PatrolParams:
             + _plogratio((1 - p) * (1 - big_q), 1 - big_q, z1)
             + _plogratio((1 - p) * big_q, big_q, z2)
         )
-        return total.reshape(dd.shape) if dd.ndim else np.float64(total)
+        return total.reshape(dd.shape) if dd.ndim else np.asarray(total)
 
     def information_increments(self) -> np.ndarray:
         """``I(d+1) - I(d)`` for ``d = 0..D-1``: the loiter reward before the penalty."""
