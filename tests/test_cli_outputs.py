@@ -36,17 +36,15 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(cli_bounds, "solve_exact", _never)
 
 
-def _one_line_error(capsys, *fragments: str, after_progress: bool = False) -> str:
-    """The error is one line, the last on stderr; before it only finished progress lines
-    (``after_progress``) or nothing at all."""
+def _one_line_error(capsys, *fragments: str) -> str:
+    """The error is one line, the only one on stderr, containing every fragment."""
     err = capsys.readouterr().err.strip()
     assert "Traceback" not in err
     lines = err.splitlines()
-    assert lines and lines[-1].startswith("lpbounds "), err
-    assert len(lines) == 1 or after_progress, err
+    assert len(lines) == 1 and lines[0].startswith("lpbounds "), err
     for f in fragments:
-        assert f in lines[-1], (f, err)
-    return lines[-1]
+        assert f in lines[0], (f, err)
+    return lines[0]
 
 
 def _unwritable_dir(tmp_path: Path) -> Path:
@@ -181,7 +179,7 @@ def test_a_failed_computation_exits_1_and_keeps_the_previous_output(tmp_path, ca
 
     monkeypatch.setattr(rp, "solve_vstar", fail)
     assert main(["reproduce", SMALL, "--out", str(out), *QUICK]) == 1
-    _one_line_error(capsys, "no convergence", after_progress=True)
+    _one_line_error(capsys, "no convergence")
     assert [p.name for p in out.iterdir()] == ["summary.json"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]  # no partial folder, no lock
 

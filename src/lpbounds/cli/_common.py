@@ -39,15 +39,16 @@ err_console = Console(stderr=True)
 
 
 class LazyProgress:
-    """A rich :class:`~rich.progress.Progress` that starts drawing at its first task, so a
-    command rejected before any work prints its one error line and nothing else."""
+    """A rich :class:`~rich.progress.Progress` that starts drawing at its first task, and
+    only on a terminal, so a rejected command prints its one error line and nothing else
+    (and a log file gets no progress frames)."""
 
     def __init__(self, prog: Progress) -> None:
         self._prog = prog
         self._started = False
 
     def add_task(self, *args: Any, **kwargs: Any) -> TaskID:
-        if not self._started:
+        if not self._started and self._prog.console.is_terminal:
             self._prog.start()
             self._started = True
         return self._prog.add_task(*args, **kwargs)
@@ -65,8 +66,8 @@ class LazyProgress:
 
 @contextmanager
 def progress(transient: bool = True) -> Iterator[LazyProgress]:
-    """A rich progress display on stderr (quiet when stderr is not a terminal), drawn from
-    the first task on."""
+    """A rich progress display on stderr, drawn from the first task on and only when stderr
+    is a terminal."""
     lazy = LazyProgress(
         Progress(
             SpinnerColumn(),
