@@ -446,6 +446,11 @@ class NLP:
         raise_on_failure : bool
             Raise :class:`~lpbounds.errors.ConvergenceError` unless the status is
             ``OPTIMAL`` (default: return the result with its status).
+        **options
+            The method's own keywords, listed under Other Parameters.
+
+        Other Parameters
+        ----------------
         solver : str
             ``"cutting-planes"``, ``"milp"``: the LP/MILP solver through cvxpy ("HIGHS"
             default). The cutting planes with ``backend="highspy"`` require HIGHS.
