@@ -1,10 +1,14 @@
-"""Helpers shared by the subcommands: console, progress bars, instance argument, argument
-types that reject bad values at parse time, and output checks made before any work."""
+"""Helpers shared by the subcommands: console, progress bars, ``--quiet``/``--verbose`` and
+logging, instance argument, argument types that reject bad values at parse time, and output
+checks made before any work."""
 
 from __future__ import annotations
 
 import argparse
+import logging
 import math
+import os
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -24,8 +28,10 @@ from ..outputs import check_output_dir, check_output_file
 __all__ = [
     "LazyProgress",
     "add_model_argument",
+    "add_verbosity_options",
     "check_output_dir",
     "check_output_file",
+    "configure_output",
     "console",
     "err_console",
     "nonnegative_int",
@@ -34,7 +40,11 @@ __all__ = [
     "progress",
 ]
 
+#: Results on stdout. Tables are laid out for 100 columns: a terminal's own width, or 100
+#: when the output goes to a file or a pipe (rich would assume 80) unless COLUMNS says.
 console = Console()
+if not console.is_terminal and "COLUMNS" not in os.environ:
+    console.width = 100
 err_console = Console(stderr=True)
 
 
@@ -48,7 +58,8 @@ class LazyProgress:
         self._started = False
 
     def add_task(self, *args: Any, **kwargs: Any) -> TaskID:
-        if not self._started and self._prog.console.is_terminal:
+        console_ = self._prog.console
+        if not self._started and console_.is_terminal and not console_.quiet:
             self._prog.start()
             self._started = True
         return self._prog.add_task(*args, **kwargs)
@@ -83,6 +94,46 @@ def progress(transient: bool = True) -> Iterator[LazyProgress]:
         yield lazy
     finally:
         lazy.stop()
+
+
+def add_verbosity_options(parser: argparse.ArgumentParser) -> None:
+    """``--quiet`` and ``--verbose`` (each subcommand gets them from :mod:`.main`)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="print nothing but errors: no table, no progress, no notes",
+    )
+    group.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="also print diagnostics (the lpbounds log at DEBUG, on stderr) and the "
+        "solvers' own banners and logs (where the solvers print them)",
+    )
+
+
+def configure_output(quiet: bool = False, verbose: bool = False) -> None:
+    """Set up the ``lpbounds`` logger (stderr; WARNING by default, ERROR with ``quiet``,
+    DEBUG with ``verbose``), the consoles and the solvers' output for one command.
+
+    Only the ``lpbounds`` logger is configured, never the root logger.
+    """
+    from .._quiet import show_solver_output
+
+    log = logging.getLogger("lpbounds")
+    for h in [h for h in log.handlers if getattr(h, "_lpbounds_cli", False)]:
+        log.removeHandler(h)
+    handler = logging.StreamHandler(sys.stderr)  # the current one (pytest's capsys)
+    handler.setFormatter(logging.Formatter("lpbounds: %(levelname)s: %(message)s"))
+    handler._lpbounds_cli = True  # type: ignore[attr-defined]
+    log.addHandler(handler)
+    log.setLevel(logging.DEBUG if verbose else logging.ERROR if quiet else logging.WARNING)
+    log.propagate = False
+    console.quiet = quiet
+    err_console.quiet = quiet
+    show_solver_output(verbose)
 
 
 def add_model_argument(parser: argparse.ArgumentParser, default: str | None = None) -> None:

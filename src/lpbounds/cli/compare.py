@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import math
+from typing import Any
 
-from rich.console import Console
+from rich import box
 from rich.table import Table
 from rich.text import Text
 
 from ..errors import ValidationError
 from ..study import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES, run_study, save_study
 from ..tolerances import LP_CERT_RTOL
-from ._common import console, err_console, progress
+from ._common import console, progress
+
+log = logging.getLogger("lpbounds")
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -76,6 +80,52 @@ def _fmt(x: object, spec: str) -> str:
     return format(x, spec)
 
 
+#: (heading, justification); numbers never wrap, text columns fold: the table fits 100
+#: columns (a 100-column terminal or a pipe) with the longest solver and status names.
+_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("LP", "left"),
+    ("solver", "left"),
+    ("status", "left"),
+    ("objective", "right"),
+    ("cert.err", "right"),
+    ("ok", "left"),
+    ("max dev", "right"),
+    ("resid", "right"),
+    ("comp s", "right"),
+    ("solve s", "right"),
+    ("iter", "right"),
+)
+
+
+def _instance_table(instance: str, rows: Any) -> Table:
+    """The summary rows of one instance, as a table at most 100 columns wide."""
+    table = Table(
+        title=Text(instance, "bold"),
+        title_justify="left",
+        box=box.SIMPLE_HEAD,
+        padding=(0, 1, 0, 0),
+        show_edge=False,
+    )
+    for col, just in _COLUMNS:
+        text = col in ("solver", "status")
+        table.add_column(col, justify=just, no_wrap=not text, overflow="fold")  # type: ignore[arg-type]
+    for row in rows.itertuples(index=False):
+        table.add_row(
+            Text(str(row.formulation)),  # Text: no markup or emoji (":100:" is an emoji code)
+            Text(str(row.config)),
+            Text(str(row.status)),
+            _fmt(row.objective, ".8g"),
+            _fmt(row.certified_error, ".1e"),
+            "yes" if row.accurate and row.status == "optimal" else "[red]no[/red]",
+            _fmt(row.max_deviation, ".1e"),
+            _fmt(row.primal_residual, ".1e"),
+            _fmt(row.compile_seconds, ".3f"),
+            _fmt(row.solve_seconds, ".3f"),
+            _fmt(row.iterations, ".0f"),
+        )
+    return table
+
+
 def run(args: argparse.Namespace) -> int:
     with progress() as prog:
         task = prog.add_task("comparing solvers", total=None, status="")
@@ -96,49 +146,19 @@ def run(args: argparse.Namespace) -> int:
     if result.frame.empty:
         raise ValidationError("nothing was solved: " + ("; ".join(result.notes) or "no task"))
     summary = result.summary()
-    table = Table(title=f"lpbounds compare ({len(result.frame)} solves, {result.seconds:.1f} s)")
-    for col in (
-        "instance",
-        "form.",
-        "solver",
-        "status",
-        "objective",
-        "cert. error",
-        "ok",
-        "max dev.",
-        "residual",
-        "compile s",
-        "solve s",
-        "iter.",
-    ):
-        table.add_column(
-            col, justify="left" if col in ("instance", "solver", "status") else "right"
-        )
-    for row in summary.itertuples(index=False):
-        table.add_row(
-            Text(str(row.instance)),  # Text: no markup or emoji (":100:" is an emoji code)
-            Text(str(row.formulation)),
-            Text(str(row.config)),
-            Text(str(row.status)),
-            _fmt(row.objective, ".8g"),
-            _fmt(row.certified_error, ".1e"),
-            "yes" if row.accurate and row.status == "optimal" else "[red]no[/red]",
-            _fmt(row.max_deviation, ".1e"),
-            _fmt(row.primal_residual, ".1e"),
-            _fmt(row.compile_seconds, ".3f"),
-            _fmt(row.solve_seconds, ".3f"),
-            _fmt(row.iterations, ".0f"),
-        )
-    # a table this wide is unreadable wrapped at 80 columns: widen it when piped
-    out = console if console.is_terminal else Console(width=max(console.width, 150))
-    out.print(table)
-    out.print(
-        "cert. error = certified bound on max |LP values - exact optimum| from the returned "
-        f"point alone; ok = status optimal and cert. error <= {args.accuracy:g} * "
-        "max|R|/(1-lambda); max dev. = max |LP values - exact fixed point| (exact DP)"
+    console.print(
+        Text(f"lpbounds compare: {len(result.frame)} solves in {result.seconds:.1f} s", "bold")
+    )
+    for instance, rows in summary.groupby("instance", sort=False):
+        console.print(_instance_table(str(instance), rows))
+    console.print(
+        "cert.err = certified bound on max |LP values - exact optimum| from the returned "
+        f"point alone; ok = status optimal and cert.err <= {args.accuracy:g} * "
+        "max|R|/(1-lambda); max dev = max |LP values - exact fixed point| (exact DP); "
+        "resid = primal residual; comp s = cvxpy's compile time"
     )
     for note in result.notes:
-        err_console.print(Text(f"note: {note}"))
+        log.warning("note: %s", note)
     paths = save_study(result, args.out)
-    out.print("wrote " + ", ".join(str(p) for p in paths.values()))
+    console.print("wrote " + ", ".join(str(p) for p in paths.values()))
     return 0

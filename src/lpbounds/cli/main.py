@@ -15,6 +15,7 @@ import sys
 from collections.abc import Sequence
 
 from ..errors import LPBoundsError, OutputError, SolverNotInstalledError, ValidationError
+from ._common import add_verbosity_options, configure_output
 
 #: Subcommand modules, in the order ``lpbounds --help`` lists them.
 COMMANDS: tuple[str, ...] = ("solve", "verify", "bounds", "reproduce", "compare")
@@ -59,6 +60,8 @@ def build_parser() -> argparse.ArgumentParser:
                 raise
             continue
         module.register(sub)
+    for subparser in sub.choices.values():
+        add_verbosity_options(subparser)
     return parser
 
 
@@ -89,6 +92,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return EXIT_USAGE
         command = f"lpbounds {args.command}"
+        configure_output(quiet=args.quiet, verbose=args.verbose)
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         print(f"{command}: interrupted", file=sys.stderr)

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import argparse
 
-from rich.console import Console
+from rich import box
+from rich.markup import escape
 from rich.table import Table
 
 from ..formulations import installed_lp_solvers, resolve_solver
@@ -92,11 +93,11 @@ def run(args: argparse.Namespace) -> int:
         prog.update(task, description="Remark 2 (soft aggregation)")
         records += verify_remark2(solvers, seed=args.seed, rtol=args.rtol)
         prog.advance(task)
-    out = console if console.is_terminal else Console(width=220)
-    out.print(_records_table(records))
-    out.print(_summary_table(records))
+    for table in _records_tables(records):
+        console.print(table)
+    console.print(_summary_table(records))
     if skipped:
-        out.print(
+        console.print(
             f"skipped (more than {args.max_states} states or size unknown; name one to "
             f"verify it): {', '.join(skipped)}"
         )
@@ -112,48 +113,76 @@ def _verdict(v: str) -> str:
     return f"[{_STYLE[v]}]{v}[/]"
 
 
-def _records_table(records: list[dict]) -> Table:  # type: ignore[type-arg]
+def _records_tables(records: list[dict]) -> list[Table]:  # type: ignore[type-arg]
+    """The records, one table per instance, each at most 100 columns wide (the claim and
+    how it was checked fold; the numbers never do)."""
     counts = {v: sum(r["verdict"] == v for r in records) for v in _STYLE}
-    table = Table(
-        title=f"lpbounds verify: {counts['holds']} hold, {counts['inconclusive']} inconclusive, "
-        f"{counts['violated']} violated"
-    )
-    for col, just in (
-        ("check", "left"),
-        ("claim", "left"),
-        ("instance", "left"),
-        ("solver", "left"),
-        ("verdict", "left"),
-        ("cert. width", "right"),
-        ("deviation", "right"),
-        ("accuracy", "right"),
-        ("detail", "left"),
-    ):
-        table.add_column(col, justify=just, no_wrap=col != "detail")  # type: ignore[arg-type]
+    tables: list[Table] = []
+    by_instance: dict[str, list[dict]] = {}  # type: ignore[type-arg]
     for r in records:
-        detail = r["detail"]
-        if r["verdict"] == "violated":
-            lo, hi = r["lp_interval"], r["exact_interval"]
-            detail = (
-                f"entry {r['index']}: [{lo[0]:.10g}, {lo[1]:.10g}] vs exact "
-                f"[{hi[0]:.10g}, {hi[1]:.10g}]; {detail}"
+        by_instance.setdefault(r["instance"], []).append(r)
+    for i, (instance, rows) in enumerate(by_instance.items()):
+        title = f"{instance}"
+        if i == 0:
+            title = (
+                f"lpbounds verify: {counts['holds']} hold, {counts['inconclusive']} "
+                f"inconclusive, {counts['violated']} violated\n\n{instance}"
             )
-        table.add_row(
-            r["check"],
-            r["claim"],
-            r["instance"],
-            r["solver"],
-            _verdict(r["verdict"]),
-            f"{r['width']:.2e}",
-            f"{r['deviation']:.2e}",
-            f"{r['accuracy']:.2e}",
-            detail,
+        table = Table(
+            title=title,
+            title_justify="left",
+            box=box.SIMPLE_HEAD,
+            show_edge=False,
+            padding=(0, 1, 0, 0),
         )
-    return table
+        for col, just in (
+            ("check", "left"),
+            ("solver", "left"),
+            ("verdict", "left"),
+            ("width", "right"),
+            ("dev.", "right"),
+            ("acc.", "right"),
+            ("claim: how it was checked", "left"),
+        ):
+            table.add_column(
+                col,
+                justify=just,  # type: ignore[arg-type]
+                no_wrap=not col.startswith("claim"),
+                overflow="fold",
+            )
+        for r in rows:
+            table.add_row(*_record_cells(r))
+        tables.append(table)
+    return tables
+
+
+def _record_cells(r: dict) -> tuple[str, ...]:  # type: ignore[type-arg]
+    detail = r["detail"]
+    if r["verdict"] == "violated":
+        lo, hi = r["lp_interval"], r["exact_interval"]
+        detail = (
+            f"entry {r['index']}: [{lo[0]:.10g}, {lo[1]:.10g}] vs exact "
+            f"[{hi[0]:.10g}, {hi[1]:.10g}]; {detail}"
+        )
+    return (
+        r["check"],
+        r["solver"],
+        _verdict(r["verdict"]),
+        f"{r['width']:.1e}",
+        f"{r['deviation']:.1e}",
+        f"{r['accuracy']:.1e}",
+        f"{escape(r['claim'])}: [dim]{escape(detail)}[/dim]",
+    )
 
 
 def _summary_table(records: list[dict]) -> Table:  # type: ignore[type-arg]
-    summary = Table(title="summary: verdicts of each check and solver (worst record)")
+    summary = Table(
+        title="summary: verdicts of each check and solver (worst record)",
+        title_justify="left",
+        box=box.SIMPLE_HEAD,
+        show_edge=False,
+        padding=(0, 1, 0, 0),
+    )
     for col in ("check", "solver", "holds", "inconclusive", "violated", "worst", "width", "acc."):
         summary.add_column(col, justify="left" if col in ("check", "solver", "worst") else "right")
     for row in summarize(records):
