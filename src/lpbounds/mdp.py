@@ -22,6 +22,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from . import interop
 from .errors import ValidationError
 from .tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
 from .validation import (
@@ -29,6 +30,7 @@ from .validation import (
     as_float_array,
     check_array,
     check_bool,
+    check_choice,
     check_indices,
     check_real,
     check_value_scale,
@@ -106,6 +108,18 @@ class FiniteMDP:
         Copy the arrays (default). ``copy=False`` hands them over: arrays already of
         the stored dtype are kept without a copy (and made read-only), which model
         builders use at tens of millions of states; do not modify them afterwards.
+    sense : {"max", "min"}
+        ``"min"``: ``rewards`` are costs to minimise. They are stored negated
+        (``self.rewards = -costs``), so the model is the reward-maximising problem every
+        method of lpbounds solves: its values are ``-`` the costs-to-go, and an upper
+        bound on them is minus a *lower* bound on the costs. :meth:`user_values`,
+        :meth:`user_bounds` and :meth:`user_policy` translate results back; results
+        themselves (``DPResult``, ``LPResult``, ...) stay in the reward sense.
+    sink : bool
+        True when the last state is an absorbing end state added by a converter
+        (``terminal=`` of :meth:`from_matrices` and the other ``from_*`` constructors):
+        every allowed action of it must stay there with reward 0, so its value is 0
+        under every policy. The ``user_*`` helpers drop it.
 
     Raises
     ------
@@ -133,8 +147,12 @@ class FiniteMDP:
         action_names: Sequence[str] | None = None,
         *,
         copy: bool = True,
+        sense: str = "max",
+        sink: bool = False,
     ) -> None:
         copy = check_bool("copy", copy)
+        self.sense = check_choice("sense", sense, ("max", "min"))
+        sink = check_bool("sink", sink)
         succ = check_array("successors", successors, integer=True)
         if succ.ndim != 3:
             raise ValidationError(
@@ -147,6 +165,8 @@ class FiniteMDP:
         allow = self._check_allowed(allowed, n, n_actions)
         succ = self._store_successors(succ, successors, allow, copy)
         rew = self._check_rewards(rewards, allow, copy)
+        if self.sense == "min":  # costs: the reward-maximising problem of -costs
+            rew = np.negative(rew) + 0.0
         check_value_scale(max(float(rew.max()), -float(rew.min())), self.discount)
 
         self.probabilities = _readonly(self._check_probabilities(probabilities, allow, succ.shape))
@@ -154,6 +174,7 @@ class FiniteMDP:
         self.rewards = _readonly(rew)
         self.allowed = _readonly(allow.copy())
         self.action_names = self._check_action_names(action_names, n_actions)
+        self.sink = self._check_sink(sink)
 
     # ------------------------------------------------------------------ validation
     @staticmethod
@@ -225,6 +246,28 @@ class FiniteMDP:
             out[rows, cols, :] = rows[:, None].astype(idt)
         return out
 
+    def _check_sink(self, sink: bool) -> bool:
+        """A sink must be absorbing with reward 0 (so its value is 0 and can be dropped)."""
+        if not sink:
+            return False
+        x = self.n_states - 1
+        probs = self.probabilities_full()[x]
+        leaves = (self.successors[x] != x) & (probs > 0) & self.allowed[x][:, None]
+        if leaves.any():
+            u, ll = first_index(leaves)
+            raise ValidationError(
+                f"sink=True: the last state {x} must be absorbing; successors[{x}, {u}, {ll}]"
+                f" = {int(self.successors[x, u, ll])} with probability {probs[u, ll]}"
+            )
+        paid = (self.rewards[x] != 0.0) & self.allowed[x]
+        if paid.any():
+            u = int(np.flatnonzero(paid)[0])
+            raise ValidationError(
+                f"sink=True: the last state {x} must pay reward 0; rewards[{x}, {u}] = "
+                f"{self.rewards[x, u]}"
+            )
+        return True
+
     @staticmethod
     def _check_rewards(rewards: Any, allow: np.ndarray, copy: bool) -> np.ndarray:
         rew = as_float_array("rewards", rewards, finite=False)
@@ -235,9 +278,14 @@ class FiniteMDP:
         nonfinite = ~np.isfinite(rew) & allow
         if nonfinite.any():
             x, u = first_index(nonfinite)
+            hint = (
+                "; an action that is not available belongs in allowed=, not a -inf reward"
+                if rew[x, u] == -np.inf
+                else ""
+            )
             raise ValidationError(
                 f"rewards[{x}, {u}] = {rew[x, u]} is not finite on an allowed pair "
-                f"({int(nonfinite.sum())} such entries)"
+                f"({int(nonfinite.sum())} such entries){hint}"
             )
         if not (rew[~allow] == 0.0).all():
             rew = np.where(allow, rew, 0.0)  # disallowed rewards are stored as 0
@@ -347,122 +395,255 @@ class FiniteMDP:
             return np.broadcast_to(self.probabilities, self.successors.shape)
         return self.probabilities
 
+    @property
+    def n_user_states(self) -> int:
+        """Number of the user's states: ``n_states`` without the added sink, if any."""
+        return self.n_states - int(self.sink)
+
+    def _user_entries(self, name: str, x: Any) -> Any:
+        """A state vector without the sink (a scalar is returned as a float)."""
+        arr = as_float_array(name, x, finite=False)
+        if arr.ndim == 0:
+            return float(arr)
+        if arr.shape != (self.n_states,):
+            raise ValidationError(
+                f"{name}: expected a scalar or a vector of length {self.n_states}; "
+                f"got shape {arr.shape}"
+            )
+        return arr[: self.n_user_states].copy()
+
+    def user_values(self, values: Any) -> Any:
+        """Values in the user's terms: without the sink, and costs-to-go when ``sense="min"``.
+
+        Parameters
+        ----------
+        values : array_like (n_states,) or float
+            Values of this model (e.g. ``solve_exact(mdp).values``, an LP's ``values``,
+            or a scalar such as ``c'V``).
+
+        Returns
+        -------
+        ndarray (n_user_states,) or float
+        """
+        v = self._user_entries("values", values)
+        return -v if self.sense == "min" else v
+
+    def user_bounds(self, lower: Any, upper: Any) -> tuple[Any, Any]:
+        """A bracket ``lower <= V <= upper`` of this model, in the user's terms.
+
+        With ``sense="min"`` the bracket on the costs-to-go is ``(-upper, -lower)``:
+        an upper bound on the negated-reward values is a lower bound on the costs.
+        Vectors lose the sink entry; scalars (``c'V`` brackets) are translated alone.
+
+        Returns
+        -------
+        (lower, upper) : tuple of ndarray (n_user_states,) or of floats
+        """
+        lo = self._user_entries("lower", lower)
+        hi = self._user_entries("upper", upper)
+        return (-hi, -lo) if self.sense == "min" else (lo, hi)
+
+    def user_policy(self, policy: Any) -> np.ndarray:
+        """A policy (one action per state) without the sink's entry."""
+        pol = check_array("policy", policy, integer=True)
+        if pol.shape != (self.n_states,):
+            raise ValidationError(
+                f"policy: expected a vector of length {self.n_states}; got shape {pol.shape}"
+            )
+        return np.array(pol[: self.n_user_states], dtype=np.int64)
+
     def __repr__(self) -> str:
+        extra = "".join(
+            f", {k}={v!r}" for k, v in (("sense", self.sense), ("sink", self.sink))
+            if v != {"sense": "max", "sink": False}[k]
+        )  # fmt: skip
         return (
             f"FiniteMDP(n_states={self.n_states}, n_actions={self.n_actions}, "
             f"n_outcomes={self.n_outcomes}, discount={self.discount}, "
-            f"allowed_pairs={self.n_pairs})"
+            f"allowed_pairs={self.n_pairs}{extra})"
         )
 
     # ------------------------------------------------------------------ conversions
     @classmethod
-    def from_matrices(cls, P: Any, R: Any, discount: float) -> FiniteMDP:
+    def from_matrices(
+        cls,
+        P: Any,
+        R: Any,
+        discount: float,
+        *,
+        allowed: Any = None,
+        terminal: Any = None,
+        sense: str = "max",
+        action_names: Sequence[str] | None = None,
+    ) -> FiniteMDP:
         """Build an MDP from transition matrices in pymdptoolbox's convention.
 
         Parameters
         ----------
-        P : array (A, n, n) or sequence of A (n, n) matrices, dense or scipy.sparse
-            ``P[a][x, y]`` is the probability of moving from ``x`` to ``y`` under ``a``;
-            each row must sum to one.
-        R : array (n,), (n, A), or (A, n, n) / sequence of A (n, n) matrices
+        P : (A, n, n) array, or A (n, n) matrices, dense or scipy.sparse
+            ``P[a][x, y]`` is the probability of moving from ``x`` to ``y`` under ``a``.
+            The A matrices may come as a list, a tuple, a dict with keys ``0..A-1`` or a
+            1-d object array (``np.array([csr0, csr1])``). Each row of an allowed pair
+            must sum to one (see ``terminal``).
+        R : array (n,), (n, A), (A, n, n), or A (n, n) matrices (dense or sparse)
             State rewards, expected rewards ``R[x, a]``, or transition rewards
             ``R[a][x, y]`` (whose expectation ``sum_y P[a][x, y] R[a][x, y]`` is used).
+            A rectangular nested list is read by its shape like an array (a list of
+            shape (n, A) is ``R[x, a]``); only a list holding sparse matrices, or
+            matrices of their own, is A per-transition matrices.
         discount : float
             The discount in ``[0, 1)``.
+        allowed : array_like of bool (n, A), optional
+            Actions available in each state; the rows of ``P`` and entries of ``R`` of
+            the other pairs are ignored (they may be empty, or ``-inf``).
+        terminal : True or array_like of states, optional
+            ``True``: rows summing to less than one send the missing probability to an
+            added absorbing state with reward 0, the *sink*, appended as the last state
+            (``n_states = n + 1``, ``self.sink`` is True). A list of states (or a mask of
+            shape (n,)) also ends the process after them: each of their actions pays its
+            reward and moves to the sink. Drop the sink from reported vectors with
+            :meth:`user_values` / :meth:`user_bounds` / :meth:`user_policy` (or slice
+            ``[:n]``: user states keep their indices). Default: rows must sum to one.
+        sense : {"max", "min"}
+            ``"min"`` when ``R`` holds costs (see the class parameters).
+        action_names : sequence of str, optional
 
         Returns
         -------
         FiniteMDP
-            With ``L`` = the largest number of non-zeros in a row of ``P`` and the
-            outcomes of each pair listed in column order (padded with probability 0).
+            With ``L`` = the largest number of non-zeros in a row of ``P`` (plus one for
+            a row that moves to the sink) and the outcomes of each pair listed in column
+            order (padded with probability 0).
         """
-        cls._check_discount(discount)
-        mats = cls._matrix_list(P, "P")
-        n_actions = len(mats)
-        n = mats[0].shape[0]
-        if n == 0:
-            raise ValidationError("P[0] has no state (shape (0, 0))")
-        for a, m in enumerate(mats):
-            if m.shape != (n, n):
-                raise ValidationError(f"P[{a}] has shape {m.shape}; expected {(n, n)}")
-        nnz = np.stack([np.diff(m.indptr) for m in mats], axis=1)  # (n, A)
-        empty = nnz == 0
-        if empty.any():
-            x, a = first_index(empty)
-            raise ValidationError(f"row {x} of P[{a}] is empty (sums to 0, not 1)")
-        n_out = int(nnz.max())
-        idt = index_dtype(n)
-        succ = np.repeat(np.arange(n, dtype=idt)[:, None, None], n_actions, axis=1)
-        succ = np.repeat(succ, n_out, axis=2)
-        prob = np.zeros((n, n_actions, n_out))
-        for a, m in enumerate(mats):
-            rows = np.repeat(np.arange(n), np.diff(m.indptr))
-            pos = np.arange(m.nnz) - m.indptr[rows]
-            succ[rows, a, pos] = m.indices
-            prob[rows, a, pos] = m.data
-        rew = cls._expected_rewards(R, mats, n, n_actions)
-        return cls(succ, prob, rew, discount)
-
-    @staticmethod
-    def _matrix_list(P: Any, name: str) -> list[sp.csr_matrix]:
-        if sp.issparse(P):
-            raise ValidationError(f"{name} must be A matrices (a list or an (A, n, n) array)")
-        if isinstance(P, np.ndarray):
-            if P.ndim != 3:
-                raise ValidationError(f"{name} must have shape (A, n, n); got {P.shape}")
-            items = list(P)
-        else:
-            try:
-                items = list(P)
-            except TypeError as exc:
-                raise ValidationError(f"{name} must be a sequence of A matrices") from exc
-        if not items:
-            raise ValidationError(f"{name} has no actions")
-        out = []
-        for a, m in enumerate(items):
-            if sp.issparse(m):
-                if m.dtype.kind not in "iuf":
-                    raise ValidationError(f"{name}[{a}] must hold real numbers; got {m.dtype}")
-            else:
-                m = check_array(f"{name}[{a}]", m, finite=False)
-            mat = sp.csr_matrix(m, dtype=np.float64)
-            if mat.ndim != 2:
-                raise ValidationError(f"{name}[{a}] is not a matrix")
-            mat.sum_duplicates()
-            mat.eliminate_zeros()
-            mat.sort_indices()
-            out.append(mat)
-        return out
+        return interop.from_matrices(
+            cls, P, R, discount, allowed=allowed, terminal=terminal, sense=sense,
+            action_names=action_names,
+        )  # fmt: skip
 
     @classmethod
-    def _expected_rewards(
-        cls, R: Any, mats: list[sp.csr_matrix], n: int, n_actions: int
-    ) -> np.ndarray:
-        matrices = sp.issparse(R) or (
-            isinstance(R, (list, tuple))
-            and len(R) > 0
-            and (sp.issparse(R[0]) or np.ndim(R[0]) == 2)
-        )
-        if not matrices:  # a plain list of numbers is a vector, not A matrices
-            arr = as_float_array("R", R, finite=False)
-            if arr.shape == (n,):
-                return np.repeat(arr[:, None], n_actions, axis=1)
-            if arr.shape == (n, n_actions):
-                return arr
-            if arr.shape != (n_actions, n, n):
-                raise ValidationError(
-                    f"R must have shape {(n,)}, {(n, n_actions)} or {(n_actions, n, n)}; "
-                    f"got {arr.shape}"
-                )
-        rmats = cls._matrix_list(R, "R")
-        if len(rmats) != n_actions:
-            raise ValidationError(f"R has {len(rmats)} matrices for {n_actions} actions")
-        cols = []
-        for a in range(n_actions):
-            if rmats[a].shape != (n, n):
-                raise ValidationError(f"R[{a}] has shape {rmats[a].shape}; expected {(n, n)}")
-            cols.append(np.asarray(mats[a].multiply(rmats[a]).sum(axis=1)).ravel())
-        return np.stack(cols, axis=1)
+    def from_pymdptoolbox(
+        cls,
+        P: Any,
+        R: Any,
+        discount: float,
+        *,
+        terminal: Any = None,
+        sense: str = "max",
+    ) -> FiniteMDP:
+        """Build an MDP from pymdptoolbox's ``(transitions, reward, discount)``.
+
+        Every form pymdptoolbox accepts: ``P`` as an (A, n, n) array or A dense or
+        sparse (n, n) matrices in a list, tuple, dict or 1-d object array; ``R`` as
+        (n,), (n, A) (dense or sparse), (A, n, n), or A dense or sparse matrices.
+        The same reading as :meth:`from_matrices` (see it for ``terminal`` and
+        ``sense``); pymdptoolbox has no action masks.
+        """
+        return interop.from_matrices(cls, P, R, discount, terminal=terminal, sense=sense)
+
+    @classmethod
+    def from_quantecon(
+        cls,
+        R: Any,
+        Q: Any = None,
+        beta: Any = None,
+        s_indices: Any = None,
+        a_indices: Any = None,
+        *,
+        layout: str | None = None,
+        terminal: Any = None,
+        action_names: Sequence[str] | None = None,
+    ) -> FiniteMDP:
+        """Build an MDP from QuantEcon's ``DiscreteDP`` or from its arguments.
+
+        ``from_quantecon(ddp)`` reads a ``quantecon.markov.DiscreteDP`` object;
+        ``from_quantecon(R, Q, beta)`` its product form (``R[s, a]`` (n, m),
+        ``Q[s, a, s']`` (n, m, n)); ``from_quantecon(R, Q, beta, s_indices,
+        a_indices)`` its state-action-pair form (``R`` (L,), ``Q`` (L, n) dense or
+        sparse, one row per available pair). QuantEcon itself is not needed.
+
+        Parameters
+        ----------
+        R, Q, beta, s_indices, a_indices
+            As for ``DiscreteDP``. A reward ``-inf`` means "action not available" (it
+            becomes ``allowed[s, a] = False``, and that pair's row of ``Q`` is ignored);
+            NaN and ``+inf`` are refused.
+        layout : {"sas", "ass"}, optional
+            The order of the axes of a 3-d ``Q``: ``"sas"`` is ``Q[state, action,
+            next]`` (QuantEcon, MDPSolver), ``"ass"`` is ``P[action, state, next]``
+            (pymdptoolbox). Required when the shapes do not decide it (as many actions
+            as states); otherwise taken from the shapes.
+        terminal : True or array_like of states, optional
+            See :meth:`from_matrices`.
+        action_names : sequence of str, optional
+
+        Raises
+        ------
+        ValidationError
+            For an ambiguous ``Q`` without ``layout=``, a pair listed twice, an index out
+            of range, a state with no available action, a row not summing to one.
+        """
+        return interop.from_quantecon(
+            cls, R, Q, beta, s_indices, a_indices, layout=layout, terminal=terminal,
+            action_names=action_names,
+        )  # fmt: skip
+
+    @classmethod
+    def from_transitions(
+        cls,
+        rows: Any,
+        discount: float,
+        rewards: Any = None,
+        *,
+        reward_rows: Any = None,
+        n_states: int | None = None,
+        n_actions: int | None = None,
+        terminal: Any = None,
+        sense: str = "max",
+        action_names: Sequence[str] | None = None,
+    ) -> FiniteMDP:
+        """Build an MDP from ``[s, a, s', p]`` rows (MDPSolver's elementwise format).
+
+        Parameters
+        ----------
+        rows : array_like (K, 4) or (K, 5)
+            ``[state, action, next_state, probability]``, or with a fifth column the
+            reward of that transition (the pair's reward is then ``sum p * r``). A pair
+            ``(s, a)`` is available exactly when it has rows; rows repeating a next state
+            add up (eq. 2).
+        discount : float
+        rewards : array_like (n, A), optional
+            ``R[s, a]`` (MDPSolver's ``rewards``); entries of pairs without rows are
+            ignored.
+        reward_rows : array_like (K', 3), optional
+            ``[state, action, reward]`` (MDPSolver's ``rewardsElementwise``): one per
+            available pair. With 4 columns, exactly one of ``rewards`` and
+            ``reward_rows`` is required (never guessed from a shape).
+        n_states, n_actions : int, optional
+            Default: one more than the largest index in ``rows``.
+        terminal, sense, action_names
+            See :meth:`from_matrices`.
+        """
+        return interop.from_transitions(
+            cls, rows, discount, rewards, reward_rows=reward_rows, n_states=n_states,
+            n_actions=n_actions, terminal=terminal, sense=sense, action_names=action_names,
+        )  # fmt: skip
+
+    def to_quantecon(self, form: str = "sa") -> Any:
+        """This model as a ``quantecon.markov.DiscreteDP`` (needs QuantEcon installed).
+
+        Parameters
+        ----------
+        form : {"sa", "product"}
+            ``"sa"`` (default): the state-action-pair form with a sparse ``Q``, one row
+            per allowed pair. ``"product"``: dense ``R`` (n, m) with ``-inf`` where an
+            action is not allowed and ``Q`` (n, m, n) (memory ``n * m * n``).
+
+        Notes
+        -----
+        QuantEcon maximises: a ``sense="min"`` model is exported as its stored,
+        negated-cost rewards, and an added sink as an ordinary state.
+        """
+        return interop.to_quantecon(self, form)
 
     def to_matrices(
         self, disallowed_reward: float | None = None

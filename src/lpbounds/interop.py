@@ -1,0 +1,720 @@
+"""Models from the neighbours: pymdptoolbox, QuantEcon's ``DiscreteDP`` and MDPSolver.
+
+The converters behind :meth:`FiniteMDP.from_matrices <lpbounds.mdp.FiniteMDP.from_matrices>`,
+:meth:`~lpbounds.mdp.FiniteMDP.from_pymdptoolbox`, :meth:`~lpbounds.mdp.FiniteMDP.from_quantecon`,
+:meth:`~lpbounds.mdp.FiniteMDP.from_transitions` and
+:meth:`~lpbounds.mdp.FiniteMDP.to_quantecon` (the classmethods are thin wrappers; the
+class is passed in, so this module never imports :mod:`lpbounds.mdp`).
+
+Every input form is first brought to one intermediate: the *pairs* of the model, a
+sparse matrix ``Q`` whose row ``k`` is the distribution of the next state after action
+``a[k]`` in state ``s[k]``, with the expected reward ``r[k]`` (:func:`model_from_pairs`).
+Pairs that are not listed are not available (the ``allowed`` mask). Rules shared by every
+converter:
+
+* a layout that the shapes do not decide is never guessed: ``Q`` of shape ``(n, n, n)``
+  with as many actions as states needs ``layout="sas"`` (``Q[s, a, s']``, QuantEcon and
+  MDPSolver) or ``layout="ass"`` (``P[a, s, s']``, pymdptoolbox);
+* ``terminal=True`` adds one absorbing state with reward 0 (the *sink*, the last state)
+  and sends to it the probability missing from every row that sums to less than one;
+  ``terminal=[states]`` also ends the process after the listed states (every action of
+  a listed state moves to the sink after its reward). Without ``terminal`` such rows are
+  refused. The sink's value is 0 under every policy; :meth:`FiniteMDP.user_values
+  <lpbounds.mdp.FiniteMDP.user_values>` drops it from reported vectors;
+* ``sense="min"``: the rewards are costs to minimise; they are stored negated (the model
+  is the reward-maximising problem of the negated costs) and the ``user_*`` helpers of
+  :class:`~lpbounds.mdp.FiniteMDP` translate values and bounds back.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import ValidationError
+from .tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
+from .validation import (
+    as_array,
+    as_float_array,
+    check_array,
+    check_choice,
+    check_int,
+    check_real,
+    first_index,
+)
+
+if TYPE_CHECKING:
+    from .mdp import FiniteMDP
+
+__all__ = [
+    "from_matrices",
+    "from_quantecon",
+    "from_transitions",
+    "model_from_pairs",
+    "to_quantecon",
+]
+
+LAYOUTS = ("sas", "ass")
+_TERMINAL_HINT = (
+    "pass terminal=True to send the missing probability to an absorbing end state "
+    "(value 0), or fix the row"
+)
+_MASK_HINT = (
+    "an action that is not available belongs in allowed= (from_matrices), or use "
+    "FiniteMDP.from_quantecon, which reads -inf rewards as 'not available'"
+)
+
+
+# ---------------------------------------------------------------------- the shared builder
+def _check_discount(discount: Any) -> float:
+    return check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
+
+
+def _terminal_states(terminal: Any, n: int) -> tuple[bool, np.ndarray]:
+    """``(add a sink, mask of the states that end the process)`` from ``terminal=``."""
+    none = np.zeros(n, dtype=bool)
+    if terminal is None or terminal is False:
+        return False, none
+    if terminal is True:
+        return True, none
+    arr = as_array("terminal", terminal)
+    if arr.dtype == bool:
+        if arr.shape != (n,):
+            raise ValidationError(f"terminal: a boolean mask needs shape ({n},); got {arr.shape}")
+        return True, arr.copy()
+    idx = check_array("terminal", arr, integer=True)
+    if idx.ndim != 1:
+        raise ValidationError(f"terminal must be True, state indices or a mask; got {idx.shape}")
+    bad = (idx < 0) | (idx >= n)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ValidationError(f"terminal[{k}] = {int(idx[k])} is not a state in [0, {n})")
+    mask = none.copy()
+    mask[idx.astype(np.int64)] = True
+    return True, mask
+
+
+def _check_rows(
+    q: sp.csr_matrix,
+    pairs: tuple[np.ndarray, np.ndarray],
+    row_name: Callable[[int], str],
+    sink: bool,
+) -> np.ndarray:
+    """Finite, non-negative entries; rows summing to less than one only with a sink.
+
+    Returns the probability each row misses (0 where complete). Rows summing to more
+    than one are left to :class:`~lpbounds.mdp.FiniteMDP`, which names them.
+    """
+    rows = np.repeat(np.arange(q.shape[0]), np.diff(q.indptr))
+    for bad, what in (
+        (~np.isfinite(q.data), "not finite"),
+        (q.data < -PROBABILITY_NEGATIVE_ATOL, "negative"),
+    ):
+        if bad.any():
+            j = int(np.flatnonzero(bad)[0])
+            raise ValidationError(
+                f"{row_name(int(rows[j]))}: the probability {q.data[j]} of next state "
+                f"{int(q.indices[j])} is {what}"
+            )
+    missing = 1.0 - np.asarray(q.sum(axis=1)).ravel()
+    short = missing > PROBABILITY_SUM_ATOL
+    if short.any() and not sink:
+        k = int(np.flatnonzero(short)[0])
+        x, u = int(pairs[0][k]), int(pairs[1][k])
+        raise ValidationError(
+            f"{row_name(k)}: probabilities[{x}, {u}, :] sum to {1.0 - missing[k]:.12g}, not 1 "
+            f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(short.sum())} such pairs): {_TERMINAL_HINT}"
+        )
+    return np.where(short, missing, 0.0)
+
+
+def model_from_pairs(
+    cls: type[FiniteMDP],
+    q: Any,
+    s: np.ndarray,
+    a: np.ndarray,
+    r: np.ndarray,
+    shape: tuple[int, int],
+    discount: float,
+    *,
+    row_name: Callable[[int], str],
+    terminal: Any = None,
+    sense: str = "max",
+    action_names: Any = None,
+) -> FiniteMDP:
+    """Build the model from its available pairs (the intermediate of every converter).
+
+    Parameters
+    ----------
+    cls : type
+        :class:`~lpbounds.mdp.FiniteMDP` (or a subclass).
+    q : scipy.sparse matrix (K, n)
+        Row ``k``: the next-state distribution of pair ``(s[k], a[k])``.
+    s, a : ndarray of int (K,)
+        The pairs, in range and without repetition (checked by the callers).
+    r : ndarray (K,)
+        Their expected rewards (finite).
+    shape : (n, m)
+        Numbers of states and actions.
+    discount : float
+    row_name : callable
+        ``row_name(k)``: how the user's input names row ``k`` (for messages).
+    terminal, sense, action_names
+        See the module docstring and :class:`~lpbounds.mdp.FiniteMDP`.
+    """
+    n, m = shape
+    sink, term = _terminal_states(terminal, n)
+    q = sp.csr_matrix(q, dtype=np.float64)
+    q.sum_duplicates()
+    q.eliminate_zeros()
+    q.sort_indices()
+    ends = term[s]
+    if ends.any():  # a terminal state's actions all move to the sink after their reward
+        keep = np.repeat(~ends, np.diff(q.indptr)).astype(np.float64)
+        q = sp.csr_matrix((q.data * keep, q.indices, q.indptr), shape=q.shape)
+        q.eliminate_zeros()
+    idle = term.copy()
+    idle[s] = False  # a terminal state listed without any action gets action 0 (reward 0)
+    if idle.any():
+        extra = np.flatnonzero(idle)
+        s, a = np.concatenate([s, extra]), np.concatenate([a, np.zeros_like(extra)])
+        r = np.concatenate([r, np.zeros(extra.size)])
+        q = sp.vstack([q, sp.csr_matrix((extra.size, n))], format="csr")
+        row_name = _with_terminal_rows(row_name, len(s) - extra.size, s)
+    missing = _check_rows(q, (s, a), row_name, sink)
+    return _assemble(cls, q, s, a, r, missing, (n, m), discount, sink, sense, action_names)
+
+
+def _with_terminal_rows(
+    row_name: Callable[[int], str], k0: int, s: np.ndarray
+) -> Callable[[int], str]:
+    """Names of the rows added for terminal states listed without an action."""
+
+    def name(k: int) -> str:
+        return row_name(k) if k < k0 else f"terminal state {int(s[k])}"
+
+    return name
+
+
+def _assemble(
+    cls: type[FiniteMDP],
+    q: sp.csr_matrix,
+    s: np.ndarray,
+    a: np.ndarray,
+    r: np.ndarray,
+    missing: np.ndarray,
+    shape: tuple[int, int],
+    discount: float,
+    sink: bool,
+    sense: str,
+    action_names: Any,
+) -> FiniteMDP:
+    """The successor/probability arrays of :class:`FiniteMDP` from checked pairs."""
+    n, m = shape
+    n_all = n + int(sink)
+    counts = np.diff(q.indptr)
+    to_sink = missing > 0.0
+    n_out = max(int((counts + to_sink).max()), 1)
+    succ = np.repeat(np.arange(n_all, dtype=np.int64)[:, None, None], m, axis=1)
+    succ = np.repeat(succ, n_out, axis=2)
+    prob = np.zeros((n_all, m, n_out))
+    rows = np.repeat(np.arange(q.shape[0]), counts)
+    pos = np.arange(q.nnz) - q.indptr[rows]
+    succ[s[rows], a[rows], pos] = q.indices
+    prob[s[rows], a[rows], pos] = q.data
+    k = np.flatnonzero(to_sink)
+    succ[s[k], a[k], counts[k]] = n  # the sink is the last state
+    prob[s[k], a[k], counts[k]] = missing[k]
+    rew = np.zeros((n_all, m))
+    allowed = np.zeros((n_all, m), dtype=bool)
+    rew[s, a] = r
+    allowed[s, a] = True
+    if sink:  # absorbing, reward 0, every action allowed (round-trips through pymdptoolbox)
+        prob[n, :, 0] = 1.0
+        allowed[n, :] = True
+    return cls(succ, prob, rew, discount, allowed, action_names, copy=False, sense=sense, sink=sink)
+
+
+# ---------------------------------------------------------------------- pymdptoolbox
+def _items(x: Any, name: str) -> list[Any]:
+    """The per-action items of a list, tuple, dict (keys 0..A-1) or object/3-d array."""
+    if isinstance(x, Mapping):
+        if set(x) != set(range(len(x))):
+            raise ValidationError(f"{name}: a dict needs the keys 0..A-1; got {list(x)!r}")
+        return [x[k] for k in range(len(x))]
+    if isinstance(x, np.ndarray):
+        if x.dtype == object and x.ndim == 1:
+            return list(x)
+        if x.ndim != 3:
+            raise ValidationError(f"{name} must have shape (A, n, n); got {x.shape}")
+        return list(x)
+    try:
+        return list(x)
+    except TypeError as exc:
+        raise ValidationError(f"{name} must be a sequence of A matrices") from exc
+
+
+def matrix_list(P: Any, name: str) -> list[sp.csr_matrix]:
+    """``A`` CSR matrices from any of pymdptoolbox's forms of ``P`` (or of matrix ``R``)."""
+    if sp.issparse(P) or isinstance(P, (str, bytes)) or P is None:
+        raise ValidationError(f"{name} must be A matrices (a list or an (A, n, n) array)")
+    items = _items(P, name)
+    if not items:
+        raise ValidationError(f"{name} has no actions")
+    out = []
+    for a, m in enumerate(items):
+        if sp.issparse(m):
+            if m.dtype.kind not in "iuf":
+                raise ValidationError(f"{name}[{a}] must hold real numbers; got {m.dtype}")
+        else:
+            m = check_array(f"{name}[{a}]", m, finite=False)
+            if m.ndim != 2:
+                raise ValidationError(f"{name}[{a}] is not a matrix (shape {m.shape})")
+        mat = sp.csr_matrix(m, dtype=np.float64)
+        mat.sum_duplicates()
+        mat.eliminate_zeros()
+        mat.sort_indices()
+        out.append(mat)
+    return out
+
+
+def _reward_kind(R: Any) -> str:
+    """``"matrices"`` (A per-transition matrices) or ``"array"`` (an (n,), (n, A) or 3-d array)."""
+    if sp.issparse(R):
+        return "array"
+    if isinstance(R, np.ndarray):
+        return "matrices" if R.dtype == object and R.ndim == 1 else "array"
+    if isinstance(R, Mapping):
+        return "matrices"
+    if isinstance(R, (list, tuple)) and any(sp.issparse(x) for x in R):
+        return "matrices"
+    try:  # a rectangular nested list is an array, whatever its length
+        arr = np.asarray(R)
+    except (ValueError, TypeError):
+        return "matrices"  # ragged: per-action items
+    return "array" if arr.dtype != object else "matrices"
+
+
+def _check_reward_values(arr: np.ndarray, allowed: np.ndarray) -> None:
+    bad = ~np.isfinite(arr) & allowed
+    if bad.any():
+        x, u = first_index(bad)
+        hint = f": {_MASK_HINT}" if arr[x, u] == -np.inf else ""
+        raise ValidationError(
+            f"the expected reward of state {x}, action {u} is {arr[x, u]}, not finite "
+            f"({int(bad.sum())} such pairs){hint}"
+        )
+
+
+def expected_rewards(R: Any, mats: list[sp.csr_matrix], allowed: np.ndarray) -> np.ndarray:
+    """``R[x, a]`` (n, A) from pymdptoolbox's forms: (n,), (n, A), (A, n, n) or A matrices."""
+    n, n_actions = allowed.shape
+    if _reward_kind(R) == "array":
+        arr = np.asarray(R.toarray()) if sp.issparse(R) else R
+        arr = as_float_array("R", arr, finite=False)
+        if arr.shape == (n,):
+            out = np.repeat(arr[:, None], n_actions, axis=1)
+        elif arr.shape == (n, n_actions):
+            out = arr
+        elif arr.shape == (n_actions, n, n):
+            return _transition_rewards([sp.csr_matrix(x) for x in arr], mats, allowed)
+        else:
+            hint = (
+                " (R[action, state] is transposed: pymdptoolbox's R is R[state, action]; pass R.T)"
+                if arr.shape == (n_actions, n)
+                else ""
+            )
+            raise ValidationError(
+                f"R must have shape {(n,)}, {(n, n_actions)} or {(n_actions, n, n)}; "
+                f"got {arr.shape}{hint}"
+            )
+        _check_reward_values(out, allowed)
+        return out
+    return _transition_rewards(matrix_list(R, "R"), mats, allowed)
+
+
+def _transition_rewards(
+    rmats: list[sp.csr_matrix], mats: list[sp.csr_matrix], allowed: np.ndarray
+) -> np.ndarray:
+    """``sum_y P[a][x, y] R[a][x, y]`` for each pair."""
+    n, n_actions = allowed.shape
+    if len(rmats) != n_actions:
+        raise ValidationError(f"R has {len(rmats)} matrices for {n_actions} actions")
+    cols = []
+    for a in range(n_actions):
+        if rmats[a].shape != (n, n):
+            raise ValidationError(f"R[{a}] has shape {rmats[a].shape}; expected {(n, n)}")
+        cols.append(np.asarray(mats[a].multiply(rmats[a]).sum(axis=1)).ravel())
+    out = np.stack(cols, axis=1)
+    _check_reward_values(out, allowed)
+    return out
+
+
+def _layout_hint(P: Any) -> str:
+    shape = getattr(P, "shape", None)
+    if shape is not None and len(shape) == 3 and shape[0] == shape[2] != shape[1]:
+        return (
+            f" (shape {tuple(shape)} looks like Q[state, action, next] of QuantEcon or "
+            "MDPSolver: use FiniteMDP.from_quantecon, or P.transpose(1, 0, 2))"
+        )
+    return ""
+
+
+def from_matrices(
+    cls: type[FiniteMDP],
+    P: Any,
+    R: Any,
+    discount: Any,
+    *,
+    allowed: Any = None,
+    terminal: Any = None,
+    sense: str = "max",
+    action_names: Any = None,
+) -> FiniteMDP:
+    """The converter of :meth:`FiniteMDP.from_matrices` (pymdptoolbox's convention)."""
+    discount = _check_discount(discount)
+    sense = check_choice("sense", sense, ("max", "min"))
+    mats = matrix_list(P, "P")
+    n_actions, n = len(mats), mats[0].shape[0]
+    if n == 0:
+        raise ValidationError("P[0] has no state (shape (0, 0))")
+    for a, m in enumerate(mats):
+        if m.shape != (n, n):
+            raise ValidationError(f"P[{a}] has shape {m.shape}; expected {(n, n)}{_layout_hint(P)}")
+    allow = cls._check_allowed(allowed, n, n_actions)
+    if terminal is None:
+        nnz = np.stack([np.diff(m.indptr) for m in mats], axis=1)  # (n, A)
+        empty = (nnz == 0) & allow
+        if empty.any():
+            x, a = first_index(empty)
+            raise ValidationError(
+                f"row {x} of P[{a}] is empty (sums to 0, not 1): {_TERMINAL_HINT}"
+            )
+    rew = expected_rewards(R, mats, allow)
+    x_idx, a_idx = np.nonzero(allow)
+    stacked = sp.vstack(mats, format="csr")
+    q = stacked[a_idx * n + x_idx]
+    return model_from_pairs(
+        cls, q, x_idx, a_idx, rew[x_idx, a_idx], (n, n_actions), discount,
+        row_name=lambda k: f"row {int(x_idx[k])} of P[{int(a_idx[k])}]",
+        terminal=terminal, sense=sense, action_names=action_names,
+    )  # fmt: skip
+
+
+# ---------------------------------------------------------------------- QuantEcon
+def _is_discrete_dp(obj: Any) -> bool:
+    return all(hasattr(obj, k) for k in ("R", "Q", "beta")) and not isinstance(
+        obj, (np.ndarray, list, tuple)
+    )
+
+
+def _quantecon_rewards(R: Any, name: str = "R") -> tuple[np.ndarray, np.ndarray]:
+    """Rewards and the availability mask (``-inf`` = not available; NaN, ``+inf`` refused)."""
+    rew = as_float_array(name, R, finite=False)
+    bad = np.isnan(rew) | (rew == np.inf)
+    if bad.any():
+        idx = first_index(bad)
+        raise ValidationError(
+            f"{name}[{', '.join(map(str, idx))}] = {rew[idx]}: rewards must be finite, or "
+            "-inf for an action that is not available"
+        )
+    return rew, rew > -np.inf
+
+
+def _product_layout(q: np.ndarray, n: int, m: int, layout: Any) -> str:
+    sas, ass = (n, m, n), (m, n, n)
+    if layout is not None:
+        layout = check_choice("layout", layout, LAYOUTS)
+        want = sas if layout == "sas" else ass
+        if q.shape != want:
+            raise ValidationError(f"Q with layout={layout!r} must have shape {want}; got {q.shape}")
+        return layout
+    if q.shape == sas == ass:
+        raise ValidationError(
+            f"Q has shape {q.shape} with as many actions as states ({n}): its layout is "
+            "ambiguous and is never guessed; pass layout='sas' (Q[state, action, next], "
+            "QuantEcon's and MDPSolver's) or layout='ass' (P[action, state, next], "
+            "pymdptoolbox's)"
+        )
+    if q.shape == sas:
+        return "sas"
+    if q.shape == ass:
+        return "ass"
+    raise ValidationError(
+        f"Q must have shape {sas} (Q[state, action, next], R of shape {(n, m)}) or {ass} "
+        f"(P[action, state, next]); got {q.shape}"
+    )
+
+
+def _quantecon_product(cls, R, Q, beta, layout, terminal, action_names):  # type: ignore[no-untyped-def]
+    rew, avail = _quantecon_rewards(R)
+    if rew.ndim != 2:
+        raise ValidationError(f"R must have shape (n, m) (or (L,) with s_indices); got {rew.shape}")
+    n, m = rew.shape
+    if sp.issparse(Q):
+        raise ValidationError(
+            "a sparse Q needs the state-action-pair form: pass s_indices and a_indices"
+        )
+    q = as_float_array("Q", Q, finite=False)
+    if q.ndim != 3:
+        raise ValidationError(f"Q must be 3-d (n, m, n) with R of shape {(n, m)}; got {q.shape}")
+    order = _product_layout(q, n, m, layout)
+    if order == "ass":
+        q = q.transpose(1, 0, 2)
+    x_idx, a_idx = np.nonzero(avail)
+    lab = "Q" if order == "sas" else "P"
+    return model_from_pairs(
+        cls, sp.csr_matrix(q[x_idx, a_idx]), x_idx, a_idx, rew[x_idx, a_idx], (n, m), beta,
+        row_name=lambda k: (
+            f"{lab}[{x_idx[k]}, {a_idx[k]}, :]" if order == "sas"
+            else f"{lab}[{a_idx[k]}, {x_idx[k]}, :]"
+        ),
+        terminal=terminal, action_names=action_names,
+    )  # fmt: skip
+
+
+def _pair_indices(s_indices: Any, a_indices: Any, n_pairs: int, n: int) -> tuple[Any, Any]:
+    out = []
+    for name, idx in (("s_indices", s_indices), ("a_indices", a_indices)):
+        arr = check_array(name, idx, integer=True)
+        if arr.shape != (n_pairs,):
+            raise ValidationError(
+                f"{name} must have shape ({n_pairs},) (one per row of Q); got {arr.shape}"
+            )
+        out.append(arr)
+    s, a = out
+    for name, arr, hi in (("s_indices", s, n), ("a_indices", a, None)):
+        bad = (arr < 0) | (arr >= hi) if hi is not None else arr < 0
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            rng = f"[0, {hi})" if hi is not None else ">= 0"
+            raise ValidationError(f"{name}[{k}] = {int(arr[k])} is out of range {rng}")
+    s, a = s.astype(np.int64), a.astype(np.int64)
+    m = int(a.max()) + 1 if a.size else 1
+    key = s * m + a
+    order = np.argsort(key, kind="stable")
+    dup = np.flatnonzero(key[order][1:] == key[order][:-1])
+    if dup.size:
+        i, j = sorted((int(order[dup[0]]), int(order[dup[0] + 1])))
+        raise ValidationError(
+            f"the pair (state {int(s[i])}, action {int(a[i])}) is listed twice: "
+            f"s_indices/a_indices[{i}] and [{j}]"
+        )
+    return s, a
+
+
+def _quantecon_sa(cls, R, Q, beta, s_indices, a_indices, terminal, action_names):  # type: ignore[no-untyped-def]
+    if sp.issparse(Q):
+        if Q.dtype.kind not in "iuf":
+            raise ValidationError(f"Q must hold real numbers; got {Q.dtype}")
+        q = sp.csr_matrix(Q, dtype=np.float64)
+    else:
+        qd = as_float_array("Q", Q, finite=False)
+        if qd.ndim != 2:
+            raise ValidationError(f"Q must be 2-d (L, n) with s_indices; got {qd.shape}")
+        q = sp.csr_matrix(qd)
+    n_pairs, n = q.shape
+    rew, avail = _quantecon_rewards(R)
+    if rew.shape != (n_pairs,):
+        raise ValidationError(f"R must have shape ({n_pairs},) (one per row of Q); got {rew.shape}")
+    s, a = _pair_indices(s_indices, a_indices, n_pairs, n)
+    m = int(a.max()) + 1
+    keep = np.flatnonzero(avail)
+    return model_from_pairs(
+        cls, q[keep], s[keep], a[keep], rew[keep], (n, m), beta,
+        row_name=lambda k: f"Q[{keep[k]}, :] (state {s[keep[k]]}, action {a[keep[k]]})",
+        terminal=terminal, action_names=action_names,
+    )  # fmt: skip
+
+
+def from_quantecon(
+    cls: type[FiniteMDP],
+    R: Any,
+    Q: Any = None,
+    beta: Any = None,
+    s_indices: Any = None,
+    a_indices: Any = None,
+    *,
+    layout: str | None = None,
+    terminal: Any = None,
+    action_names: Any = None,
+) -> FiniteMDP:
+    """The converter of :meth:`FiniteMDP.from_quantecon`."""
+    if Q is None and beta is None and _is_discrete_dp(R):
+        ddp = R
+        sa = getattr(ddp, "_sa_pair", getattr(ddp, "s_indices", None) is not None)
+        beta = _check_discount(ddp.beta)
+        if sa:
+            return _quantecon_sa(
+                cls, ddp.R, ddp.Q, beta, ddp.s_indices, ddp.a_indices, terminal, action_names
+            )
+        return _quantecon_product(cls, ddp.R, ddp.Q, beta, "sas", terminal, action_names)
+    if Q is None or beta is None:
+        raise ValidationError(
+            "from_quantecon takes a DiscreteDP, or R, Q and beta (with s_indices and "
+            "a_indices for the state-action-pair form)"
+        )
+    beta = _check_discount(beta)
+    if (s_indices is None) != (a_indices is None):
+        raise ValidationError("s_indices and a_indices go together: pass both or neither")
+    if s_indices is None:
+        return _quantecon_product(cls, R, Q, beta, layout, terminal, action_names)
+    if layout is not None:
+        raise ValidationError("layout= applies to the product form (3-d Q) only")
+    return _quantecon_sa(cls, R, Q, beta, s_indices, a_indices, terminal, action_names)
+
+
+def to_quantecon(mdp: FiniteMDP, form: str = "sa") -> Any:
+    """The converter of :meth:`FiniteMDP.to_quantecon`."""
+    check_choice("form", form, ("sa", "product"))
+    try:
+        from quantecon.markov import DiscreteDP
+    except ImportError as exc:  # an optional dependency
+        raise ImportError(
+            "FiniteMDP.to_quantecon needs QuantEcon: pip install 'lpbounds[interop]'"
+        ) from exc
+    n, m, n_out = mdp.n_states, mdp.n_actions, mdp.n_outcomes
+    x_idx, a_idx = np.nonzero(mdp.allowed)
+    probs = mdp.probabilities_full()
+    rows = np.repeat(np.arange(x_idx.size), n_out)
+    q = sp.csr_matrix(
+        (np.asarray(probs[x_idx, a_idx]).ravel(), (rows, mdp.successors[x_idx, a_idx].ravel())),
+        shape=(x_idx.size, n),
+    )
+    q.sum_duplicates()
+    q.eliminate_zeros()
+    r = np.array(mdp.rewards[x_idx, a_idx], dtype=np.float64)
+    if form == "sa":
+        return DiscreteDP(r, q, mdp.discount, x_idx, a_idx)
+    rew = np.full((n, m), -np.inf)
+    rew[x_idx, a_idx] = r
+    dense = np.zeros((n, m, n))
+    dense[np.arange(n)[:, None], np.arange(m)[None, :], np.arange(n)[:, None]] = 1.0
+    dense[x_idx, a_idx] = q.toarray()
+    return DiscreteDP(rew, dense, mdp.discount)
+
+
+# ---------------------------------------------------------------------- MDPSolver
+def _index_column(
+    rows: np.ndarray, c: int, what: str, hi: int | None, name: str = "rows"
+) -> np.ndarray:
+    col = rows[:, c]
+    frac = ~np.isfinite(col) | (col != np.round(col)) if col.dtype.kind == "f" else None
+    if frac is not None and frac.any():
+        i = int(np.flatnonzero(frac)[0])
+        raise ValidationError(f"{name}[{i}, {c}] = {col[i]} is not a whole number (the {what})")
+    col = col.astype(np.int64)
+    bad = (col < 0) | (col >= hi) if hi is not None else col < 0
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        rng = f"[0, {hi})" if hi is not None else ">= 0"
+        raise ValidationError(f"{name}[{i}, {c}] = {int(col[i])}: the {what} is out of range {rng}")
+    return col
+
+
+def _pair_rewards(pair_s, pair_a, shape, rewards, reward_rows):  # type: ignore[no-untyped-def]
+    """Rewards of the pairs from an (n, A) matrix or from [s, a, r] rows."""
+    if (rewards is None) == (reward_rows is None):
+        raise ValidationError(
+            "rows with 4 columns [s, a, s', p] need exactly one of rewards= (an (n, A) "
+            "array) or reward_rows= ([s, a, r] rows); 5 columns [s, a, s', p, r] need neither"
+        )
+    n, m = shape
+    if rewards is not None:
+        arr = as_float_array("rewards", rewards, finite=False)
+        if arr.shape != (n, m):
+            raise ValidationError(
+                f"rewards must have shape {(n, m)} (states, actions); got {arr.shape}"
+            )
+        out = arr[pair_s, pair_a]
+        bad = ~np.isfinite(out)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise ValidationError(
+                f"rewards[{pair_s[k]}, {pair_a[k]}] = {out[k]} is not finite on a pair with "
+                "transitions"
+            )
+        return out
+    rr = check_array("reward_rows", reward_rows)
+    if rr.ndim != 2 or rr.shape[1] != 3:
+        raise ValidationError(f"reward_rows must have shape (K, 3) [s, a, r]; got {rr.shape}")
+    rs = _index_column(rr, 0, "state", n, "reward_rows")
+    ra = _index_column(rr, 1, "action", m, "reward_rows")
+    lookup = {(int(x), int(u)): k for k, (x, u) in enumerate(zip(pair_s, pair_a, strict=True))}
+    out = np.full(len(pair_s), np.nan)
+    for i in range(rr.shape[0]):
+        k = lookup.get((int(rs[i]), int(ra[i])))
+        if k is None:
+            raise ValidationError(
+                f"reward_rows[{i}]: the pair (state {rs[i]}, action {ra[i]}) has no transition"
+            )
+        if not np.isnan(out[k]):
+            raise ValidationError(f"reward_rows[{i}]: the pair ({rs[i]}, {ra[i]}) has two rewards")
+        out[k] = rr[i, 2]
+    miss = np.isnan(out)
+    if miss.any():
+        k = int(np.flatnonzero(miss)[0])
+        raise ValidationError(
+            f"the pair (state {pair_s[k]}, action {pair_a[k]}) has transitions but no reward "
+            f"in reward_rows ({int(miss.sum())} such pairs)"
+        )
+    return out
+
+
+def from_transitions(
+    cls: type[FiniteMDP],
+    rows: Any,
+    discount: Any,
+    rewards: Any = None,
+    *,
+    reward_rows: Any = None,
+    n_states: Any = None,
+    n_actions: Any = None,
+    terminal: Any = None,
+    sense: str = "max",
+    action_names: Any = None,
+) -> FiniteMDP:
+    """The converter of :meth:`FiniteMDP.from_transitions`."""
+    discount = _check_discount(discount)
+    sense = check_choice("sense", sense, ("max", "min"))
+    tr = check_array("rows", rows, nonempty=True)
+    if tr.ndim != 2 or tr.shape[1] not in (4, 5):
+        raise ValidationError(
+            f"rows must have shape (K, 4) [s, a, s', p] or (K, 5) [s, a, s', p, r]; got {tr.shape}"
+        )
+    tr = np.asarray(tr, dtype=np.float64)
+    hi_s = None if n_states is None else check_int("n_states", n_states, lo=1)
+    hi_a = None if n_actions is None else check_int("n_actions", n_actions, lo=1)
+    s = _index_column(tr, 0, "state", hi_s)
+    a = _index_column(tr, 1, "action", hi_a)
+    nxt = _index_column(tr, 2, "next state", hi_s)
+    n = hi_s if hi_s is not None else int(max(s.max(), nxt.max())) + 1
+    m = hi_a if hi_a is not None else int(a.max()) + 1
+    key, first_row, inv = np.unique(s * m + a, return_index=True, return_inverse=True)
+    pair_s, pair_a = key // m, key % m
+    p = tr[:, 3]
+    q = sp.csr_matrix((p, (inv, nxt)), shape=(key.size, n))  # repeated next states add up
+    if tr.shape[1] == 5:
+        if rewards is not None or reward_rows is not None:
+            raise ValidationError("rows with a reward column take no rewards= or reward_rows=")
+        pr = p * tr[:, 4]
+        bad = ~np.isfinite(pr)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ValidationError(
+                f"rows[{i}]: probability {p[i]} times reward {tr[i, 4]} is not finite"
+            )
+        r = np.bincount(inv, weights=pr, minlength=key.size)
+    else:
+        r = _pair_rewards(pair_s, pair_a, (n, m), rewards, reward_rows)
+    return model_from_pairs(
+        cls, q, pair_s, pair_a, r, (n, m), discount,
+        row_name=lambda k: (
+            f"the rows of pair (state {pair_s[k]}, action {pair_a[k]}) "
+            f"(first: rows[{first_row[k]}])"
+        ),
+        terminal=terminal, sense=sense, action_names=action_names,
+    )  # fmt: skip
