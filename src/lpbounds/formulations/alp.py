@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
@@ -65,6 +66,17 @@ class ALP(Formulation):
     cost : array_like (n_states,), optional
         ``c >= 0`` (default ones); the objective is ``(Phi' c)' r``.
 
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        ``min (Phi'c)'r  s.t.  bellman``.
+    r : cvxpy.Variable (K,)
+        The weights ``r`` (``variables["r"]``).
+    constraints : dict
+        ``"bellman"``: eq. 10 with a general ``Phi``, ``(Phi r)(x) >= R_u(x) + lambda
+        sum_l p_l (Phi r)(f(x, u, Y_l))`` for every allowed (x, u), one sparse vector
+        constraint (the exact rows times ``Phi``); duals ``result.group_duals["bellman"]``.
+
     Notes
     -----
     Result: ``values`` is ``r``, ``state_values`` is ``Phi r``, ``mu`` the duals per
@@ -88,7 +100,18 @@ class ALP(Formulation):
         c = check_cost(cost, mdp.n_states)
         self.rows = exact_rows(mdp)
         a_exact, b = self.rows.constraint_matrix()
-        super().__init__(a_exact @ self.basis, b, np.asarray(self.basis.T @ c).ravel())
+        super().__init__(
+            a_exact @ self.basis,
+            b,
+            np.asarray(self.basis.T @ c).ravel(),
+            variables=[("r", self.basis.shape[1])],
+            groups=[("bellman", b.size)],
+        )
+
+    @property
+    def r(self) -> cp.Variable:
+        """The cvxpy variable ``r`` (one weight per basis column)."""
+        return self.variables["r"]
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         return x, np.asarray(self.basis @ x).ravel(), self.rows.pair_values(y), {}

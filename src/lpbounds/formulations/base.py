@@ -1,10 +1,16 @@
 r"""The base of every LP formulation: data ``min c'x s.t. A x >= b`` -> cvxpy -> certified result.
 
 Following cvxpy's split of building data, calling the solver and mapping the result
-back, a :class:`Formulation` is built from sparse data ``(A, b, c)`` (one vector
-constraint ``A @ x >= b``, never one Python constraint per row), exposes the cvxpy
-problem as :attr:`Formulation.problem`, and :meth:`Formulation.solve` returns an
-:class:`LPResult` whose every number lpbounds computes itself from the returned point:
+back, a :class:`Formulation` is built from sparse data ``(A, b, c)`` and exposes it as
+the cvxpy problem :attr:`Formulation.problem`, written in the paper's symbols: one named
+``cp.Variable`` per symbol (``v``, ``V``, ``v_1..v_L``, ``z``, ``r``, ``w``: the columns of
+``A`` split into :attr:`Formulation.variables`) and one named constraint group per
+equation (``bellman`` for eq. 9, ...: the rows of ``A`` split into
+:attr:`Formulation.constraints`), each group ONE sparse vector constraint (never one
+Python object per row). ``A``, ``b``, ``c`` stay available as the stacked data; ``x`` and
+the duals ``y`` of a result are the variables and the groups' duals stacked in that
+order. :meth:`Formulation.solve` returns an :class:`LPResult` whose every number lpbounds
+computes itself from the returned point:
 
 * the **certificate** (:mod:`lpbounds.certificate`): for an LP of Bellman rows (ELP,
   RLP, SLP, IB, UBLP, LBLP) a bracket ``lower_values <= exact optimum <= upper_values``
@@ -20,6 +26,10 @@ problem as :attr:`Formulation.problem`, and :meth:`Formulation.solve` returns an
 Sign conventions: ``y_r >= 0`` is the multiplier of row ``r`` of ``A x >= b``; at an
 optimum ``A' y = c`` (stationarity), ``y' (A x - b) = 0`` (complementarity). For Bellman
 rows, the duals spread over (state, action) pairs are the paper's ``mu_u^i(x)``.
+
+A user's own constraints on the named variables go through ``solve(extra_constraints=[...])``
+(the research modifications of issue 12): the same checks, with the certificate reported
+only where it still applies (see :meth:`Formulation.solve`).
 """
 
 from __future__ import annotations
@@ -191,7 +201,10 @@ class LPResult:
     certificate : Certificate or None
         The full certificate (residuals, rounding margin, contraction modulus).
     duals : ndarray
-        ``y >= 0``, one per row of ``A x >= b``.
+        ``y >= 0``, one per row of ``A x >= b`` (the groups' duals stacked in row order).
+    group_duals : dict of str to ndarray
+        The same duals per named constraint group (``group_duals["bellman"]``, ...; the
+        groups of :attr:`Formulation.constraints`).
     mu : ndarray or None
         Duals spread over (state, action) pairs (shape (n, A)): the paper's ``mu``.
     solver : str
@@ -213,6 +226,21 @@ class LPResult:
         ``|c'x - b'y|``.
     extra : dict
         Formulation-specific data (e.g. IB's blocks); ``extra["message"]`` on failure.
+    modified : bool
+        True for a solve with ``extra_constraints``: then ``lower_values``/``upper_values``
+        and ``certificate`` are about the ORIGINAL problem's optimum (still valid, see
+        :meth:`Formulation.solve`), ``error_bound`` is ``inf`` and ``objective_bracket`` is
+        ``(certified lower bound, inf)``.
+    extra_residuals : tuple of float
+        Per extra constraint, its largest violation at the returned point (cvxpy's
+        ``violation()``, computed from the point).
+    extra_duals : tuple of ndarray
+        Per extra constraint, its dual (cvxpy's sign: ``>= 0`` for ``<=``/``>=``, free for
+        ``==``).
+    kkt_gap : float
+        Modified solves only: the duality gap of the modified LP from all the duals,
+        ``|c'x - D| + ||r||_1 max|x|`` (``D`` the Lagrangian dual value, ``r`` the
+        stationarity residual; see :meth:`Formulation.solve`); ``nan`` otherwise.
     """
 
     formulation: str
@@ -239,6 +267,11 @@ class LPResult:
     certificate: Certificate | None = None
     accuracy: float = LP_CERT_RTOL
     extra: dict[str, Any] = field(default_factory=dict)
+    group_duals: dict[str, np.ndarray] = field(default_factory=dict)
+    modified: bool = False
+    extra_residuals: tuple[float, ...] = ()
+    extra_duals: tuple[np.ndarray, ...] = ()
+    kkt_gap: float = float("nan")
 
     @property
     def ok(self) -> bool:
@@ -247,8 +280,11 @@ class LPResult:
 
     @property
     def relative_error(self) -> float:
-        """The certified error relative to ``max|R| / (1 - lambda)`` (``inf`` without one)."""
-        return self.certificate.relative_error() if self.certificate is not None else float("inf")
+        """The certified error relative to ``max|R| / (1 - lambda)`` (``inf`` without one,
+        and for a modified solve, whose optimum has no certificate)."""
+        if self.certificate is None or not np.isfinite(self.error_bound):
+            return float("inf")
+        return self.certificate.relative_error()
 
 
 #: cvxpy's statuses in lpbounds' vocabulary, before the certificate has its say.
@@ -304,12 +340,50 @@ class _Run:
     iterations: int | None
 
 
-class Formulation:
-    r"""``min c'x  s.t.  A x >= b`` as a cvxpy problem, with certified results.
+#: The constraint types ``extra_constraints`` accepts: what ``<=``, ``>=`` and ``==`` build.
+_EXTRA_TYPES = (cp.constraints.Inequality, cp.constraints.Equality)
 
-    Subclasses compute ``(A, b, c)`` from the model, override :meth:`_interpret` to map
-    ``x`` and the duals back to values, state values and ``mu``, and :meth:`_certify` /
-    :meth:`_bracket` to certify the returned point.
+
+@dataclass
+class _ExtraData:
+    """An extra constraint read back after a solve: ``expr(x) = J x + e`` (``<= 0`` or ``== 0``)."""
+
+    residual: float
+    dual: np.ndarray
+    jac_t: sp.csr_matrix  # J', shape (N, size of the constraint)
+    offset: np.ndarray  # e
+
+
+def _split(spec: list[tuple[str, int]], total: int, what: str) -> dict[str, slice]:
+    """Consecutive slices of ``total`` entries, one per named size, checked."""
+    out: dict[str, slice] = {}
+    start = 0
+    for name, size in spec:
+        if not isinstance(name, str) or not name or name in out:
+            raise ValidationError(f"{what} names must be distinct non-empty strings; got {name!r}")
+        n = check_int(f"size of {what} {name!r}", size, lo=0)
+        out[name] = slice(start, start + n)
+        start += n
+    if start != total:
+        raise ValidationError(f"the {what} sizes add up to {start}; the data has {total}")
+    return out
+
+
+def _add(terms: list[Any]) -> Any:
+    """The sum of cvxpy expressions (one term: itself, so the expression stays as built)."""
+    out = terms[0]
+    for t in terms[1:]:
+        out = out + t
+    return out
+
+
+class Formulation:
+    r"""``min c'x  s.t.  A x >= b`` as a cvxpy problem in named variables, with certified results.
+
+    Subclasses compute ``(A, b, c)`` from the model, name the blocks of its columns (the
+    paper's variables) and of its rows (one constraint group per equation), override
+    :meth:`_interpret` to map ``x`` and the duals back to values, state values and
+    ``mu``, and :meth:`_certify` / :meth:`_bracket` to certify the returned point.
 
     Parameters
     ----------
@@ -318,6 +392,26 @@ class Formulation:
     c : ndarray (N,)
     name : str
         The paper's name of the formulation.
+    variables : list of (str, int), optional
+        The columns of ``A`` in consecutive blocks, one ``cp.Variable`` each (default one
+        variable ``x``).
+    groups : list of (str, int), optional
+        The rows of ``A`` in consecutive blocks, one vector constraint each (default one
+        group ``rows``). A group with no rows is left out.
+
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        ``min sum_k c_k' var_k  s.t.  sum_k A[g, k] var_k >= b[g]`` for each group ``g``
+        (blocks of ``A`` that are all zero are left out of the sum).
+    variables : dict of str to cvxpy.Variable
+        The named variables, in the column order of ``A``.
+    constraints : dict of str to cvxpy.Constraint
+        The named constraint groups, in the row order of ``A``; each is one vector
+        ``>=`` constraint, its ``dual_value`` the group's duals ``>= 0``.
+    variable_columns, constraint_rows : dict of str to slice
+        Where each variable / group sits in the stacked ``x`` / rows of ``A``.
+    A, b, c : the stacked data (``A`` CSR).
     """
 
     name: str = "LP"
@@ -325,7 +419,16 @@ class Formulation:
     #: rather than equals, the certified fixed point: ALP, LLP).
     upper_side_only: bool = False
 
-    def __init__(self, A: sp.spmatrix, b: np.ndarray, c: np.ndarray, name: str | None = None):
+    def __init__(
+        self,
+        A: sp.spmatrix,
+        b: np.ndarray,
+        c: np.ndarray,
+        name: str | None = None,
+        *,
+        variables: list[tuple[str, int]] | None = None,
+        groups: list[tuple[str, int]] | None = None,
+    ):
         if name is not None:
             self.name = name
         self.A = sp.csr_matrix(A)
@@ -336,9 +439,29 @@ class Formulation:
             raise ValidationError(
                 f"{self.name}: A is {self.A.shape}, b {self.b.shape}, c {self.c.shape}"
             )
-        self.variable = cp.Variable(n_cols, name="x")
-        self.constraint = self.A @ self.variable >= self.b
-        self.problem = cp.Problem(cp.Minimize(self.c @ self.variable), [self.constraint])
+        self.variable_columns = _split(variables or [("x", n_cols)], n_cols, "variable")
+        rows = _split(groups or [("rows", n_rows)], n_rows, "constraint group")
+        self.constraint_rows = {k: s for k, s in rows.items() if s.stop > s.start}
+        self.variables = {
+            k: cp.Variable(s.stop - s.start, name=k) for k, s in self.variable_columns.items()
+        }
+        self.constraints = {k: self._group(s) for k, s in self.constraint_rows.items()}
+        objective = _add([self.c[s] @ self.variables[k] for k, s in self.variable_columns.items()])
+        self.problem = cp.Problem(cp.Minimize(objective), list(self.constraints.values()))
+
+    def _group(self, rows: slice) -> cp.Constraint:
+        """``sum_k A[rows, cols_k] @ var_k >= b[rows]``: one sparse vector constraint."""
+        n_rows, n_cols = self.A.shape
+        a_g = self.A if rows.stop - rows.start == n_rows else self.A[rows]
+        terms = []
+        for k, cols in self.variable_columns.items():
+            blk = a_g if cols.stop - cols.start == n_cols else a_g[:, cols]
+            if blk.nnz:
+                terms.append(blk @ self.variables[k])
+        if not terms:  # an all-zero group: keep it (0 >= b), on the first variable
+            k, cols = next(iter(self.variable_columns.items()))
+            terms.append(a_g[:, cols] @ self.variables[k])
+        return _add(terms) >= self.b[rows]
 
     # ------------------------------------------------------------------ interface
     def _interpret(
@@ -383,6 +506,96 @@ class Formulation:
         excess = (objective - bracket[0]) * (1.0 - cert.modulus)
         return bool(excess <= tol * float(self.c.sum()))
 
+    # ------------------------------------------------------------------ values
+    def point(self) -> np.ndarray | None:
+        """The variables' current values stacked as ``x`` (``None`` before a solve)."""
+        parts = [v.value for v in self.variables.values()]
+        if any(p is None for p in parts):
+            return None
+        return np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts])
+
+    def _stacked_duals(self) -> np.ndarray | None:
+        parts = []
+        for con in self.constraints.values():
+            if con.dual_value is None:
+                return None
+            parts.append(np.asarray(con.dual_value, dtype=np.float64).ravel())
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def group_duals(self, y: np.ndarray) -> dict[str, np.ndarray]:
+        """The stacked duals ``y`` split into the named constraint groups."""
+        return {k: y[s] for k, s in self.constraint_rows.items()}
+
+    # ------------------------------------------------------------------ modifications
+    def modified_problem(self, extra_constraints: Any) -> cp.Problem:
+        """:attr:`problem` with ``extra_constraints`` added (validated; ``problem`` unchanged).
+
+        Raises
+        ------
+        ValidationError
+            Naming the entry: not a constraint built with ``<=``, ``>=`` or ``==``, not
+            affine, already in the problem, or on a variable that is not one of
+            :attr:`variables`.
+        """
+        extras = self._check_extras(extra_constraints)
+        return cp.Problem(self.problem.objective, self.problem.constraints + extras)
+
+    def _check_extras(self, extra_constraints: Any) -> list[cp.Constraint]:
+        if extra_constraints is None:
+            return []
+        if isinstance(extra_constraints, cp.constraints.constraint.Constraint):
+            extra_constraints = [extra_constraints]
+        if not isinstance(extra_constraints, (list, tuple)):
+            raise ValidationError(
+                "extra_constraints must be a list of cvxpy constraints; got "
+                f"{type(extra_constraints).__name__}"
+            )
+        own = {id(v) for v in self.variables.values()}
+        have = {id(con) for con in self.problem.constraints}
+        names = ", ".join(self.variables)
+        for k, con in enumerate(extra_constraints):
+            if not isinstance(con, _EXTRA_TYPES):
+                raise ValidationError(
+                    f"extra_constraints[{k}] must be a cvxpy constraint written with <=, >= or "
+                    f"==; got {type(con).__name__}"
+                )
+            if not con.expr.is_affine():
+                raise ValidationError(
+                    f"extra_constraints[{k}] ({con}) is not affine: the problem must stay an LP"
+                )
+            if id(con) in have:
+                raise ValidationError(f"extra_constraints[{k}] is already in {self.name}.problem")
+            for var in con.variables():
+                if id(var) not in own:
+                    raise ValidationError(
+                        f"extra_constraints[{k}] uses the variable {var.name()!r}, which is not "
+                        f"a variable of this {self.name} (its variables: {names}); build the "
+                        "constraint from formulation.variables"
+                    )
+        return list(extra_constraints)
+
+    def _extra_data(self, extras: list[cp.Constraint], x: np.ndarray) -> list[_ExtraData]:
+        """Each extra constraint as ``J x + e`` at the returned point, its residual and dual."""
+        out = []
+        for con in extras:
+            expr = con.expr
+            size = int(expr.size)
+            grads = {id(k): g for k, g in (expr.grad or {}).items()}
+            blocks = []
+            for var in self.variables.values():
+                g = grads.get(id(var))
+                blocks.append(sp.csr_matrix((var.size, size)) if g is None else sp.csr_matrix(g))
+            jac_t = sp.vstack(blocks, format="csr")
+            value = np.asarray(expr.value, dtype=np.float64).ravel()
+            dual = np.asarray(
+                0.0 if con.dual_value is None else con.dual_value, dtype=np.float64
+            ).ravel() * np.ones(size)
+            if isinstance(con, cp.constraints.Inequality):
+                dual = np.maximum(dual, 0.0)
+            residual = float(np.max(np.asarray(con.violation(), dtype=np.float64), initial=0.0))
+            out.append(_ExtraData(residual, dual, jac_t, value - jac_t.T @ x))
+        return out
+
     # ------------------------------------------------------------------ solve
     def solve(
         self,
@@ -391,6 +604,7 @@ class Formulation:
         accuracy: float = LP_CERT_RTOL,
         raise_on_failure: bool = True,
         verbose: bool = False,
+        extra_constraints: Any = None,
         **solver_options: Any,
     ) -> LPResult:
         """Solve with ``solver`` (any installed cvxpy LP solver) and certify the result.
@@ -409,6 +623,11 @@ class Formulation:
             (default); otherwise return it with its status.
         verbose : bool
             Print the solver's log.
+        extra_constraints : list of cvxpy constraints, optional
+            A research modification: affine constraints written with ``<=``, ``>=`` or
+            ``==`` on this formulation's :attr:`variables` (``v[i] <= v[j]``, ...), added
+            to :attr:`problem` for this solve only (:meth:`modified_problem`; the
+            formulation itself is not changed). See "Modified problems" below.
         **solver_options
             Passed to the solver through cvxpy. HiGHS' own ``solver`` option clashes
             with this method's ``solver`` argument, so HiGHS options go in a dict:
@@ -418,32 +637,78 @@ class Formulation:
         Returns
         -------
         LPResult
+
+        Notes
+        -----
+        **Modified problems.** An added constraint can only shrink the feasible set
+        ``F`` to ``F'``, so the modified optimum ``x'*`` is a point of ``F``. What
+        lpbounds still certifies, from the returned point alone, is about the ORIGINAL
+        row system: ``lower_values <= v* <= upper_values`` for the original optimum
+        ``v*`` (the certificate takes any point). Hence ``upper_values`` stays a
+        certified upper bound on ``V*`` where the formulation gives one (RLP, UBLP, IB,
+        ALP, ELP; LBLP and SLP bound their own ``v*`` only), and, since ``v*`` is the
+        least element of ``F`` and ``x'* in F``, ``lower_values`` and the lower end of
+        ``objective_bracket`` are also certified lower bounds on the modified optimum
+        (``objective_bracket = (lower, inf)``). Nothing solver-free bounds the modified
+        optimum from above: the modified LP's optimum has no fixed-point counterpart, so
+        ``error_bound`` is ``inf`` and the status is NOT decided by the original
+        certificate's downward residual (which measures the distance to ``v*``, not to
+        ``x'*``). Instead the status is OPTIMAL when, all computed by lpbounds from the
+        returned point and the solver's duals of every constraint:
+
+        * the point satisfies the original rows to ``residual_tol`` (the certificate's
+          upward residual; ``primal_residual`` for an LP without a certificate);
+        * each extra constraint's violation (``extra_residuals``) is within
+          ``residual_tol``;
+        * the duality gap of the modified LP is within ``accuracy`` of the objective's
+          scale: with ``r = c - A'y + sum_k J_k' d_k`` (``d_k`` the duals of the extra
+          constraints ``J_k x + e_k <= 0`` / ``== 0``) and ``D = b'y + sum_k d_k' e_k``,
+          ``kkt_gap = |c'x - D| + ||r||_1 max|x| <= accuracy * sum(c) * max|R| / (1 -
+          lambda)``. By weak duality ``c'x' >= D + r'x'`` for every feasible ``x'``, so this
+          says the point is optimal up to that amount, *provided* ``max|x'*|`` is no larger
+          than ``max|x|``: a check of the solver's answer, not a certificate.
+
+        Otherwise INACCURATE (a limit status is kept). ``dual_residual`` is ``||r||_inf``
+        and ``gap`` is ``|c'x - D|``; ``group_duals`` and ``mu`` are the modified LP's
+        duals of the original groups, ``extra_duals`` those of the added constraints.
         """
         acc = _check_accuracy(accuracy)
         raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
         verbose = check_bool("verbose", verbose)
         _check_common_options(solver_options)
-        run = self._run(resolve_solver(solver), verbose, solver_options)
+        extras = self._check_extras(extra_constraints)
+        problem = (
+            self.problem
+            if not extras
+            else cp.Problem(self.problem.objective, self.problem.constraints + extras)
+        )
+        run = self._run(resolve_solver(solver), verbose, solver_options, problem)
         if run.x is None:
             return self._failed(run, acc, raise_on_failure)
-        result = self._judge(run, acc)
+        result = self._judge(run, acc) if not extras else self._judge_modified(run, acc, extras)
         if raise_on_failure and result.status is not Status.OPTIMAL:
+            what = (
+                f"certified error {result.error_bound:.3e} (relative "
+                f"{result.relative_error:.3e}, requested {acc:.1e})"
+                if not extras
+                else f"extra constraint residuals {list(result.extra_residuals)}, duality gap "
+                f"(kkt_gap) {result.kkt_gap:.3e}, requested accuracy {acc:.1e}"
+            )
             raise SolverError(
-                f"{self.name} with {run.solver}: status {result.status.value}; certified error "
-                f"{result.error_bound:.3e} (relative {result.relative_error:.3e}, requested "
-                f"{acc:.1e}); primal residual {result.primal_residual:.3e}, dual residual "
+                f"{self.name} with {run.solver}: status {result.status.value}; {what}; primal "
+                f"residual {result.primal_residual:.3e}, dual residual "
                 f"{result.dual_residual:.3e}, gap {result.gap:.3e}"
             )
         return result
 
-    def _run(self, name: str, verbose: bool, options: dict[str, Any]) -> _Run:
+    def _run(self, name: str, verbose: bool, options: dict[str, Any], problem: cp.Problem) -> _Run:
         """Call the solver through cvxpy; map its status; keep any point it returned."""
         t0 = time.perf_counter()
         try:
             with warnings.catch_warnings():
                 # cvxpy's "Solution may be inaccurate": the certificate judges that instead
                 warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-                self.problem.solve(solver=name, verbose=verbose, **options)
+                problem.solve(solver=name, verbose=verbose, **options)
         except cp.SolverError as exc:
             return _Run(name, options, Status.SOLVER_ERROR, str(exc), None, None, 0.0,
                         time.perf_counter() - t0, None)  # fmt: skip
@@ -451,21 +716,21 @@ class Formulation:
             msg = f"cvxpy or {name} rejected the problem or an option: {exc}"
             return _Run(name, options, Status.SOLVER_ERROR, msg, None, None, 0.0,
                         time.perf_counter() - t0, None)  # fmt: skip
-        status = _STATUS.get(self.problem.status, Status.SOLVER_ERROR)
-        x = self.variable.value
-        y = self.constraint.dual_value
+        status = _STATUS.get(problem.status, Status.SOLVER_ERROR)
+        x = self.point()
+        y = self._stacked_duals()
         if x is None or not status.has_point:
             x = None
-        stats = self.problem.solver_stats
-        compile_s = float(getattr(self.problem, "compilation_time", None) or 0.0)
+        stats = problem.solver_stats
+        compile_s = float(getattr(problem, "compilation_time", None) or 0.0)
         solve_s = float(stats.solve_time) if stats and stats.solve_time else 0.0
         return _Run(
             solver=name,
             options=options,
             status=status,
-            message=str(self.problem.status),
-            x=None if x is None else np.asarray(x, dtype=np.float64).ravel(),
-            y=None if y is None else np.maximum(np.asarray(y, dtype=np.float64).ravel(), 0.0),
+            message=str(problem.status),
+            x=x,
+            y=None if y is None else np.maximum(y, 0.0),
             compile_seconds=compile_s,
             solve_seconds=solve_s if solve_s else time.perf_counter() - t0 - compile_s,
             iterations=(int(stats.num_iters) if stats and stats.num_iters is not None else None),
@@ -496,6 +761,73 @@ class Formulation:
             tol = accuracy * float(np.abs(self.b).max(initial=0.0))
             accurate = primal <= tol
             err = float("inf")
+        return self._result(
+            run, accuracy, x, y, obj, primal, tol, dual_res, gap, cert, accurate,
+            lower=lower, upper=upper, error_bound=err, bracket=bracket,
+        )  # fmt: skip
+
+    def _judge_modified(self, run: _Run, accuracy: float, extras: list[cp.Constraint]) -> LPResult:
+        """The result of a modified solve: feasibility and a duality-gap check (see solve)."""
+        assert run.x is not None
+        x = run.x
+        y = np.zeros(self.A.shape[0]) if run.y is None else run.y
+        data = self._extra_data(extras, x)
+        primal = float(max(0.0, (self.b - self.A @ x).max(initial=0.0)))
+        obj = float(self.c @ x)
+        r = self.c - self.A.T @ y
+        dual_obj = float(self.b @ y)
+        for d in data:
+            r = r + d.jac_t @ d.dual
+            dual_obj += float(d.dual @ d.offset)
+        gap = abs(obj - dual_obj)
+        kkt = gap + float(np.abs(r).sum()) * float(np.abs(x).max(initial=0.0))
+        cert = self._certify(x)
+        lower: np.ndarray | None = None
+        upper: np.ndarray | None = None
+        bracket: tuple[float, float] | None = None
+        if cert is not None:
+            lower, upper, orig = self._bracket(cert)
+            bracket = None if orig is None else (orig[0], float("inf"))
+            tol = accuracy * cert.reward_absmax
+            rows_ok = cert.residual_up <= tol
+            scale = cert.reward_absmax / (1.0 - cert.modulus)
+        else:
+            tol = accuracy * float(np.abs(self.b).max(initial=0.0))
+            rows_ok = primal <= tol
+            scale = max(1.0, float(np.abs(x).max(initial=0.0)))
+        weight = float(np.abs(self.c).sum()) or 1.0
+        accurate = (
+            rows_ok and all(d.residual <= tol for d in data) and kkt <= accuracy * scale * weight
+        )
+        result = self._result(
+            run, accuracy, x, y, obj, primal, tol, float(np.abs(r).max(initial=0.0)), gap, cert,
+            accurate, lower=lower, upper=upper, error_bound=float("inf"), bracket=bracket,
+        )  # fmt: skip
+        result.modified = True
+        result.extra_residuals = tuple(d.residual for d in data)
+        result.extra_duals = tuple(d.dual for d in data)
+        result.kkt_gap = kkt
+        return result
+
+    def _result(
+        self,
+        run: _Run,
+        accuracy: float,
+        x: np.ndarray,
+        y: np.ndarray,
+        obj: float,
+        primal: float,
+        tol: float,
+        dual_res: float,
+        gap: float,
+        cert: Certificate | None,
+        accurate: bool,
+        *,
+        lower: np.ndarray | None,
+        upper: np.ndarray | None,
+        error_bound: float,
+        bracket: tuple[float, float] | None,
+    ) -> LPResult:
         status = run.status
         if status in (Status.OPTIMAL, Status.INACCURATE):
             status = Status.OPTIMAL if accurate else Status.INACCURATE
@@ -520,11 +852,12 @@ class Formulation:
             gap=gap,
             lower_values=lower,
             upper_values=upper,
-            error_bound=err,
+            error_bound=error_bound,
             objective_bracket=bracket,
             certificate=cert,
             accuracy=accuracy,
             extra=extra,
+            group_duals=self.group_duals(y),
         )
 
     def _failed(self, run: _Run, accuracy: float, raise_on_failure: bool) -> LPResult:
@@ -555,4 +888,9 @@ class Formulation:
         )
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}(rows={self.A.shape[0]}, variables={self.A.shape[1]})"
+        names = ", ".join(self.variables)
+        groups = ", ".join(self.constraints)
+        return (
+            f"{type(self).__name__}(rows={self.A.shape[0]}, variables={self.A.shape[1]}: "
+            f"{names}; constraint groups: {groups})"
+        )

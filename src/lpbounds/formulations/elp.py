@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 
 from ..dp import exact_rows
@@ -28,6 +29,17 @@ class ELP(RowsLP):
     cost : array_like (n_states,), optional
         ``c >= 0`` (default all ones).
 
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        ``min c'V  s.t.  bellman``.
+    V : cvxpy.Variable (n_states,)
+        The paper's ``V`` (``variables["V"]``).
+    constraints : dict
+        ``"bellman"``: eq. 8, ``V(x) >= R_u(x) + lambda sum_l p_l V(f(x, u, Y_l))`` for
+        every allowed (x, u), one sparse vector constraint (row ``r`` of the pair in
+        ``rows.pair_row``); its duals are ``result.group_duals["bellman"]``.
+
     Notes
     -----
     ``values`` and ``state_values`` of the result are ``V`` per state; ``mu`` holds the
@@ -36,11 +48,17 @@ class ELP(RowsLP):
     """
 
     name = "ELP"
+    variable_name = "V"
 
     def __init__(self, mdp: FiniteMDP, cost: Any = None) -> None:
         check_formulation_inputs(mdp, cost=cost)
         self.mdp = mdp
         super().__init__(exact_rows(mdp), cost)
+
+    @property
+    def V(self) -> cp.Variable:
+        """The cvxpy variable ``V`` (one entry per state)."""
+        return self.variables["V"]
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         values, _, mu, extra = super()._interpret(x, y)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
@@ -50,6 +51,19 @@ class IB(RowsLP):
     cost : array_like (n_states,), optional
         ``c(x) >= 0`` (default ones); every block gets the cost ``c-bar``.
 
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        ``min sum_j c-bar'v_j  s.t.  bellman_1, ..., bellman_L``.
+    v : list of cvxpy.Variable
+        ``v[j - 1]`` is the paper's ``v_j`` (``variables["v_j"]``), ``M`` entries each.
+    constraints : dict
+        One group per block, each one sparse vector constraint over RLP's merged rows:
+        ``"bellman_1"`` is eq. 22, ``v_1(i) >= R_u(x) + lambda sum_l p_l v_L(...)``, and
+        ``"bellman_{j+1}"`` is eq. 21 for ``j``, ``v_{j+1}(i) >= R_u(x) + lambda sum_l p_l
+        v_j(...)`` (for ``L = 1`` the single group is RLP's eq. 9). Duals:
+        ``result.group_duals["bellman_j"]``.
+
     Notes
     -----
     Result: ``values`` is ``v_1``, ``extra["blocks"]`` the (L, M) array of all blocks,
@@ -70,6 +84,21 @@ class IB(RowsLP):
         cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
         self.base_rows = BellmanRows.aggregate(mdp, partition, reduce="max")
         super().__init__(_cyclic_rows(self.base_rows, self.L), np.tile(cbar, self.L))
+
+    def _variable_blocks(self) -> list[tuple[str, int]]:
+        """``v_1, ..., v_L``: ``M`` columns each (the cyclic rows' variable blocks)."""
+        m = self.partition.n_partitions
+        return [(f"v_{j}", m) for j in range(1, self.L + 1)]
+
+    def _group_blocks(self) -> list[tuple[str, int]]:
+        """``bellman_j``: the copy of RLP's rows owned by ``v_j`` (copy ``j - 1``)."""
+        r = self.base_rows.n_rows
+        return [(f"bellman_{j}", r) for j in range(1, self.L + 1)]
+
+    @property
+    def v(self) -> list[cp.Variable]:
+        """``[v_1, ..., v_L]``: the cvxpy variable of each block."""
+        return [self.variables[f"v_{j}"] for j in range(1, self.L + 1)]
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         m = self.partition.n_partitions
@@ -153,6 +182,21 @@ class LLP(Formulation):
     cost : array_like (n_states,), optional
         ``c(x) >= 0`` (default ones).
 
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        ``min c-bar'v + d'z  s.t.  surplus_lower, surplus_upper, z_nonneg``.
+    v : cvxpy.Variable (M,)
+        The paper's ``v`` (``variables["v"]``).
+    z : cvxpy.Variable (#pairs,)
+        The lifting: one surplus per allowed pair, in the order of :attr:`pairs`.
+    constraints : dict
+        Eq. 18 with ``V = Phi v`` substituted (eq. 18's second line) and the surplus made
+        explicit, each one sparse vector constraint: ``"surplus_lower"``, ``A_pair v - z
+        >= R`` and ``"surplus_upper"``, ``z - A_pair v >= -R`` (together ``z_u(x) = V(x) -
+        R_u(x) - lambda sum_l p_l V(f(x, u, Y_l))``, eq. 18's Bellman inequality as an
+        equation), and ``"z_nonneg"``, ``z >= 0`` (the inequality itself).
+
     Notes
     -----
     Result: ``values`` is ``v``, ``extra["z"]`` the surplus per pair (shape (n, A), 0 on
@@ -202,7 +246,23 @@ class LLP(Formulation):
         b = np.concatenate([b_pair, -b_pair, np.zeros(k)])
         self.rows = rows
         self._m = m
-        super().__init__(a, b, np.concatenate([cbar, self.d[xs, us]]))
+        super().__init__(
+            a,
+            b,
+            np.concatenate([cbar, self.d[xs, us]]),
+            variables=[("v", m), ("z", k)],
+            groups=[("surplus_lower", k), ("surplus_upper", k), ("z_nonneg", k)],
+        )
+
+    @property
+    def v(self) -> cp.Variable:
+        """The cvxpy variable ``v`` (one entry per partition)."""
+        return self.variables["v"]
+
+    @property
+    def z(self) -> cp.Variable:
+        """The cvxpy variable ``z`` (one surplus per allowed pair, rows of :attr:`pairs`)."""
+        return self.variables["z"]
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         m, k = self._m, self.pairs.shape[0]

@@ -74,7 +74,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import cvxpy as cp
 import numpy as np
@@ -90,7 +90,10 @@ from ..status import Status
 from ..tolerances import NLP_GAP_RTOL, NLP_MILP_GAP_RTOL, NLP_SWITCH_RTOL, dp_scale
 from .base import aggregated_cost, resolve_solver
 
-__all__ = ["METHOD_KEYWORDS", "NLP", "NLPIteration", "NLPResult"]
+if TYPE_CHECKING:
+    from .nlp_cuts import NLPMaster
+
+__all__ = ["METHOD_KEYWORDS", "NLP", "NLPMILP", "NLPIteration", "NLPResult"]
 
 Method = Literal["cutting-planes", "strategy-iteration", "milp", "fixed-point"]
 METHODS: tuple[str, ...] = ("cutting-planes", "strategy-iteration", "milp", "fixed-point")
@@ -334,6 +337,54 @@ class NLP:
         self.box = (lo - pad * abs(lo) - _TINY, hi + pad * abs(hi) + _TINY)
         self.scale = dp_scale(float(np.abs(r.reward).max(initial=0.0)), lam)
         self._term_matrix: tuple[sp.csr_matrix, np.ndarray] | None = None
+        self._milp_model: NLPMILP | None = None
+        self._master: NLPMaster | None = None
+
+    # ------------------------------------------------------------------ cvxpy models
+    @property
+    def milp(self) -> NLPMILP:
+        """The big-M MILP of eq. 25 (:class:`NLPMILP`) in a certified box, built once.
+
+        ``lower``: :func:`~lpbounds.certificate.certify` (max-min) at the constant point
+        ``box[0]``, a floating-point lower bound on ``w*``; ``upper``: the certificate's
+        upper side at the value of the minimiser's strategy chosen at ``box[1]`` (a
+        feasible point, so ``>= w*``). The MILP's optimum is therefore ``c'w*``.
+        """
+        if self._milp_model is None:
+            n = self.rows.n_vars
+            lower = self.certify(np.full(n, self.box[0])).lower
+            v0, _ = self.strategy_value(self.best_terms(np.full(n, self.box[1])))
+            self._milp_model = NLPMILP(self, upper=self.certify(v0).upper, lower=lower)
+        return self._milp_model
+
+    @property
+    def problem(self) -> cp.Problem:
+        """Eq. 25 as a cvxpy mixed-integer problem: ``self.milp.problem``.
+
+        ``NLP(...).problem.solve(solver="HIGHS")`` (any MIP-capable cvxpy solver) gives
+        ``c'w*``; its variables are ``self.milp.w`` and ``self.milp.z``.
+        """
+        return self.milp.problem
+
+    @property
+    def master(self) -> NLPMaster:
+        """The cutting-plane master LP as a cvxpy model (:class:`.nlp_cuts.NLPMaster`).
+
+        Before a cutting-plane solve: the first master (the single-term rows and the box
+        ``box``). ``solve("cutting-planes")`` starts a fresh one and adds each round's
+        cuts to it (group ``"cuts"``), so afterwards it is the last master of that run;
+        its optimum is a lower bound on ``c'w*``.
+        """
+        if self._master is None:
+            from .nlp_cuts import NLPMaster, master_data
+
+            a, b = self.term_matrix
+            single = self.single_rows
+            m = self.rows.n_vars
+            lo, hi = np.full(m, self.box[0]), np.full(m, self.box[1])
+            data = master_data(self.cost, a[single], b[single], lo, hi)
+            self._master = NLPMaster(data, single.size)
+        return self._master
 
     # ------------------------------------------------------------------ structure
     @property
@@ -631,8 +682,7 @@ class NLP:
         # a feasible point bounds w* from above (Fact 2): it shrinks the box and the big-Ms;
         # the certificate's upper side is >= w* in floating point
         sel0 = self.best_terms(np.full(self.rows.n_vars, self.box[1]))
-        v0, _ = self.strategy_value(sel0)
-        model = NLPMILP(self, upper=self.certify(v0).upper)
+        model = self.milp
         if name == "HIGHS":
             opts.setdefault("mip_rel_gap", NLP_MILP_GAP_RTOL)
             opts.setdefault("mip_abs_gap", NLP_MILP_GAP_RTOL * self.scale)
@@ -779,26 +829,62 @@ def _mip_dual_bound(stats: Any) -> float:
 
 
 class NLPMILP:
-    r"""The big-M MILP of the NLP (a cvxpy model class).
+    r"""The disjunctive program of eq. 25 as a cvxpy mixed-integer LP (big-M; a model class).
 
-    ``min c'w`` s.t. the single-term rows ``a_r'w >= b_r``; for each term ``t`` of a
-    multi-term disjunction ``a_t'w >= b_t - M_t (1 - z_t)``, ``z_t`` binary and
-    ``sum_{t in d} z_t = 1``; ``lo <= w <= hi``. ``M_t = max(0, b_t - min_{lo <= w <= hi}
-    a_t'w)``: with ``z_t = 0`` the row is implied by the box, so the MILP's feasible set
-    is exactly the NLP's inside the box, which contains ``w*``.
+    .. math:: \min \bar c^T w \quad\text{s.t.}\quad
+       a_t^T w \ge b_t - M_t (1 - z_t)\ \ (t \text{ a term of a multi-term } (i, u)),\quad
+       \sum_{t \in (i, u)} z_t = 1,\quad z_t \in \{0, 1\},\quad
+       a_t^T w \ge b_t\ \ (\text{single-term } (i, u)),\quad lo \le w \le hi,
 
-    ``lo = min rho / (1 - lambda)`` and, by default, ``hi = max rho / (1 - lambda)`` (the
-    box of :attr:`NLP.box`). ``upper`` may replace ``hi`` by any NLP-feasible point: a
-    feasible ``v`` satisfies ``v >= w*`` (Fact 2), so the box still contains ``w*`` and the
-    MILP's optimum is unchanged, while the smaller ``M_t`` tighten its relaxation
-    (:meth:`NLP.solve` passes the value of one strategy: 3-6x faster on a 30-state,
-    6-partition garnet).
+    with term ``t`` of disjunction ``(i, u)`` the row ``w(i) >= rho_t + lambda sum_l
+    p_{t,l} w(k_{t,l})`` (``a_t = e_i - lambda P_t``, ``b_t = rho_t``: one distinct successor
+    tuple of ``T(i, u)``). ``z_t = 1`` selects the term that must hold, which is eq. 25's
+    ``w(i) >= min_t q_t(w)``. ``M_t = max(0, b_t - min_{lo <= w <= hi} a_t'w)``: with
+    ``z_t = 0`` the row is implied by the box, so inside the box the MILP's feasible set is
+    exactly the NLP's.
+
+    The box must contain ``w*`` (then the MILP's optimum is ``c'w*``: ``w*`` is the least
+    element of the NLP's feasible set, Fact 2). :meth:`NLP.milp` passes a certified one:
+    ``lower`` from :func:`~lpbounds.certificate.certify` (max-min operator) at the constant
+    point ``min rho / (1 - lambda)`` and ``upper`` from the certificate of the value of one
+    strategy (a feasible point, so ``>= w*``; 3-6x faster than ``hi = max rho / (1 -
+    lambda)`` on a 30-state, 6-partition garnet because the ``M_t`` shrink). Without them
+    the box is :attr:`NLP.box`.
+
+    Parameters
+    ----------
+    nlp : NLP
+    upper, lower : ndarray (M,), optional
+        Bounds on ``w*`` (each clipped to :attr:`NLP.box`).
+
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        The MILP; ``problem.solve(solver="HIGHS")`` (or any installed MIP-capable cvxpy
+        solver: SCIP, GLPK_MI, ...) gives ``c'w*`` to the solver's MIP gap (HiGHS' default
+        relative gap is 1e-4; pass ``mip_rel_gap=1e-10`` for more).
+    w : cvxpy.Variable (M,)
+        The paper's ``w``.
+    z : cvxpy.Variable or None
+        One boolean per term of the multi-term disjunctions (rows :attr:`multi_rows` of
+        ``nlp.rows``); ``None`` when every disjunction has one term (then an LP).
+    constraints : dict of str to cvxpy.Constraint
+        ``"single"``: eq. 25 for the single-term (i, u) (ordinary rows); ``"disjunction"``:
+        the big-M rows of the multi-term (i, u); ``"select"``: ``sum_t z_t = 1`` per
+        multi-term (i, u); ``"box_lower"``, ``"box_upper"``: ``lo <= w <= hi``. Each is one
+        sparse vector constraint; groups with no rows are absent.
+    big_m : ndarray
+        ``M_t`` per multi-term row.
+    lo, hi : ndarray (M,)
+        The box.
     """
 
-    def __init__(self, nlp: NLP, upper: np.ndarray | None = None) -> None:
+    def __init__(
+        self, nlp: NLP, upper: np.ndarray | None = None, lower: np.ndarray | None = None
+    ) -> None:
         a, b = nlp.term_matrix
         m = nlp.rows.n_vars
-        lo = np.full(m, nlp.box[0])
+        lo = np.full(m, nlp.box[0]) if lower is None else np.maximum(lower, nlp.box[0])
         hi = np.full(m, nlp.box[1]) if upper is None else np.minimum(upper, nlp.box[1])
         single = nlp.single_rows
         multi_mask = np.repeat(nlp.disj_size >= 2, nlp.disj_size)
@@ -811,21 +897,32 @@ class NLPMILP:
         self.big_m = np.maximum(0.0, bm - box_min)
         self.lo, self.hi = lo, hi
         self.w = cp.Variable(m, name="w")
-        cons = [self.w >= lo, self.w <= hi]
+        cons: dict[str, cp.Constraint] = {}
         if single.size:
-            cons.append(a[single] @ self.w >= b[single])
+            cons["single"] = a[single] @ self.w >= b[single]
         self.z: cp.Variable | None = None
         if self.multi_rows.size:
             self.z = cp.Variable(self.multi_rows.size, boolean=True, name="z")
-            cons.append(am @ self.w - sp.diags(self.big_m) @ self.z >= bm - self.big_m)
+            cons["disjunction"] = am @ self.w - sp.diags(self.big_m) @ self.z >= bm - self.big_m
             d_of = nlp.disj_of_row[self.multi_rows]
             _, d_idx = np.unique(d_of, return_inverse=True)
             s = sp.csr_matrix(
                 (np.ones(d_idx.size), (d_idx, np.arange(d_idx.size))),
                 shape=(int(d_idx.max()) + 1, d_idx.size),
             )
-            cons.append(s @ self.z == 1)
-        self.problem = cp.Problem(cp.Minimize(nlp.cost @ self.w), cons)
+            cons["select"] = s @ self.z == 1
+        cons["box_lower"] = self.w >= lo
+        cons["box_upper"] = self.w <= hi
+        self.constraints = cons
+        self.variables = {"w": self.w} if self.z is None else {"w": self.w, "z": self.z}
+        self.problem = cp.Problem(cp.Minimize(nlp.cost @ self.w), list(cons.values()))
+
+    def __repr__(self) -> str:
+        nz = 0 if self.z is None else self.z.size
+        return (
+            f"NLPMILP(w={self.w.size}, binaries={nz}, constraint groups: "
+            f"{', '.join(self.constraints)})"
+        )
 
 
 @contextmanager

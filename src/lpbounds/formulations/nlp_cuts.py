@@ -74,6 +74,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
@@ -423,14 +424,21 @@ def block_bounds(joint: LPData, row_dual: np.ndarray, n_terms: int) -> np.ndarra
 
 # ---------------------------------------------------------------------- cvxpy models
 class GeneralLP(Formulation):
-    """A cvxpy model class of :class:`LPData` (converted to ``A x >= b``)."""
+    """A cvxpy model class of :class:`LPData` (converted to ``A x >= b``; variable ``x``)."""
 
     name = "LP"
 
-    def __init__(self, data: LPData, name: str | None = None) -> None:
+    def __init__(
+        self,
+        data: LPData,
+        name: str | None = None,
+        *,
+        variables: list[tuple[str, int]] | None = None,
+        groups: list[tuple[str, int]] | None = None,
+    ) -> None:
         self.data = data
         a, b = data.to_geq()
-        super().__init__(a, b, data.c, name)
+        super().__init__(a, b, data.c, name, variables=variables, groups=groups)
 
 
 class NLPMaster(GeneralLP):
@@ -438,15 +446,81 @@ class NLPMaster(GeneralLP):
 
     ``G w >= h``: the NLP's single-term (i, u) as ordinary rows and the cuts so far. Its
     optimum is a lower bound on ``c'w*`` as long as every cut is valid.
+
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        ``min c-bar'w  s.t.  single, cuts, box_lower, box_upper``.
+    w : cvxpy.Variable (M,)
+        The paper's ``w`` (``variables["w"]``); kept when cuts are added.
+    constraints : dict
+        ``"single"``: eq. 25 for the (i, u) with one term (an ordinary Bellman row
+        ``w(i) >= rho_t + lambda sum_l p_l w(k_l)``); ``"cuts"``: the disjunctive cuts
+        ``alpha'w >= beta`` so far (valid for every term of eq. 25's disjunctions; absent
+        before the first round); ``"box_lower"``/``"box_upper"``: ``lo <= w <= hi``.
+        Each is one sparse vector constraint.
+    n_single : int
+        The number of single-term rows (the rows of ``data`` before the cuts).
     """
 
     name = "NLP-master"
+
+    def __init__(self, data: LPData, n_single: int | None = None) -> None:
+        n_rows, m = data.A.shape
+        self.n_single = n_rows if n_single is None else int(n_single)
+        finite = bool(
+            np.isfinite(data.row_lo).all()
+            and np.isinf(data.row_hi).all()
+            and np.isfinite(data.col_lo).all()
+            and np.isfinite(data.col_hi).all()
+        )
+        if not finite:
+            raise ValidationError("the NLP master needs >= rows and a finite box")
+        super().__init__(data, variables=[("w", m)], groups=self._groups(n_rows, m))
+
+    def _groups(self, n_rows: int, m: int) -> list[tuple[str, int]]:
+        return [
+            ("single", self.n_single),
+            ("cuts", n_rows - self.n_single),
+            ("box_lower", m),
+            ("box_upper", m),
+        ]
+
+    @property
+    def w(self) -> Any:
+        """The cvxpy variable ``w``."""
+        return self.variables["w"]
+
+    @property
+    def n_cuts(self) -> int:
+        """Cuts in the master so far."""
+        return int(self.data.A.shape[0] - self.n_single)
 
     @classmethod
     def build(
         cls, c: np.ndarray, G: sp.csr_matrix, h: np.ndarray, lo: np.ndarray, hi: np.ndarray
     ) -> NLPMaster:
+        """The master of ``min c'w  s.t.  G w >= h,  lo <= w <= hi`` (no cuts yet)."""
         return cls(master_data(c, G, h, lo, hi))
+
+    def add_cuts(self, alpha: np.ndarray, beta: np.ndarray) -> None:
+        """Append the cuts ``alpha w >= beta`` (one per row): the same variable ``w``, a new
+        ``"cuts"`` group and :attr:`problem` rebuilt around them."""
+        alpha = np.atleast_2d(np.asarray(alpha, dtype=np.float64))
+        beta = np.atleast_1d(np.asarray(beta, dtype=np.float64))
+        self.data = _append_rows(self.data, alpha, beta)
+        a, b = self.data.to_geq()
+        self.A, self.b = sp.csr_matrix(a), np.asarray(b, dtype=np.float64)
+        n_rows, m = self.data.A.shape
+        rows = {}
+        start = 0
+        for k, size in self._groups(n_rows, m):
+            if size:
+                rows[k] = slice(start, start + size)
+            start += size
+        self.constraint_rows = rows
+        self.constraints = {k: self._group(s) for k, s in rows.items()}
+        self.problem = cp.Problem(self.problem.objective, list(self.constraints.values()))
 
 
 class CutGeneratingLP(GeneralLP):
@@ -480,11 +554,14 @@ class _Backend:
             )
         self.options = options
         self.master: _PersistentMaster | None = None
+        self.model: NLPMaster | None = None
         self.master_data: LPData | None = None
         self.scratch = _highs() if kind == "highspy" else None
 
-    def _cvxpy(self, data: LPData, cls: type[GeneralLP] = GeneralLP) -> HighsSolution:
-        model = cls(data)
+    def _cvxpy(
+        self, data: LPData, cls: type[GeneralLP] = GeneralLP, model: GeneralLP | None = None
+    ) -> HighsSolution:
+        model = cls(data) if model is None else model
         res = model.solve(self.solver, raise_on_failure=False, **self.options)
         if not res.ok:
             return HighsSolution(str(res.status), res.x, np.zeros(data.A.shape[0]), np.nan, 0)
@@ -497,24 +574,25 @@ class _Backend:
         row_dual[fh] -= y[k : k + int(fh.sum())]
         return HighsSolution("optimal", res.x, row_dual, res.objective, res.iterations or 0)
 
-    def start_master(self, data: LPData) -> None:
-        self.master_data = data
+    def start_master(self, model: NLPMaster) -> None:
+        """Solve ``model`` round by round (highspy: a persistent copy of it, kept in step)."""
+        self.model = model
+        self.master_data = model.data
         if self.kind == "highspy":
-            self.master = _PersistentMaster(data)
+            self.master = _PersistentMaster(model.data)
 
     def add_cuts(self, alpha: np.ndarray, beta: np.ndarray) -> None:
-        assert self.master_data is not None
+        assert self.master_data is not None and self.model is not None
+        self.model.add_cuts(alpha, beta)
         if self.master is not None:
             self.master.add_cuts(alpha, beta)
-            self.master_data = self.master.data
-        else:
-            self.master_data = _append_rows(self.master_data, alpha, beta)
+        self.master_data = self.model.data
 
     def solve_master(self) -> HighsSolution:
-        assert self.master_data is not None
+        assert self.master_data is not None and self.model is not None
         if self.master is not None:
             return self.master.solve()
-        return self._cvxpy(self.master_data, NLPMaster)
+        return self._cvxpy(self.master_data, model=self.model)
 
     def solve(self, data: LPData, cls: type[GeneralLP] = GeneralLP) -> HighsSolution:
         if self.kind == "highspy":
@@ -595,7 +673,10 @@ def cutting_planes(
     a_all, b_all = nlp.term_matrix
     single = nlp.single_rows
     n_single = single.size
-    be.start_master(master_data(c, a_all[single], b_all[single], lo, hi))
+    # the master as a cvxpy model (nlp.master), updated with every round's cuts
+    master = NLPMaster(master_data(c, a_all[single], b_all[single], lo, hi), n_single)
+    nlp._master = master
+    be.start_master(master)
     scale = nlp.scale
     # the gap is measured in the problem's units, sum(c) max|R| / (1 - lambda): an absolute
     # max(1, |upper|) would call a 10 % gap closed when the rewards are of order 1e-6

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 
 from ..mdp import FiniteMDP
@@ -39,6 +40,20 @@ class RLP(RowsLP):
         ``c-bar' v`` with ``c-bar(i) = sum_{x in S_i} c(x)``.
     partition_cost : array_like (M,), optional
         ``c-bar`` directly (instead of ``cost``).
+
+    Attributes
+    ----------
+    problem : cvxpy.Problem
+        ``min c-bar'v  s.t.  bellman``.
+    v : cvxpy.Variable (M,)
+        The paper's ``v``, one entry per partition (``variables["v"]``).
+    constraints : dict
+        ``"bellman"``: eq. 9, ``v(i) >= R_u(x) + lambda sum_l p_l v(f-bar(x, u, Y_l))``,
+        one sparse vector constraint over the merged rows; its duals are
+        ``result.group_duals["bellman"]`` (spread over pairs: ``result.mu``).
+
+    Add constraints of your own with ``solve(extra_constraints=[rlp.v[i] <= rlp.v[j]])``
+    (:meth:`~lpbounds.formulations.base.Formulation.solve`: what stays certified).
 
     Notes
     -----
@@ -67,6 +82,11 @@ class RLP(RowsLP):
         if rows is None:
             rows = BellmanRows.aggregate(mdp, partition, reduce="max")
         super().__init__(rows, cbar)
+
+    @property
+    def v(self) -> cp.Variable:
+        """The cvxpy variable ``v`` (one entry per partition)."""
+        return self.variables["v"]
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         values, _, mu, extra = super()._interpret(x, y)

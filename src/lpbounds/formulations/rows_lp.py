@@ -24,6 +24,10 @@ __all__ = ["RowsLP"]
 class RowsLP(Formulation):
     r"""``min c'v`` subject to the rows ``v(i) >= reward_r + lambda sum_l p_{r,l} v(k_{r,l})``.
 
+    As a cvxpy model (:attr:`problem`): one variable named :attr:`variable_name` (``v``
+    unless a subclass names it after its paper symbol) and one constraint group named
+    :attr:`group_name` (``bellman``) holding every row as one sparse vector constraint.
+
     Parameters
     ----------
     rows : BellmanRows
@@ -33,12 +37,26 @@ class RowsLP(Formulation):
     """
 
     name = "RowsLP"
+    #: The name of the cvxpy variable (the paper's symbol).
+    variable_name = "v"
+    #: The name of the constraint group (after the equation it implements).
+    group_name = "bellman"
 
     def __init__(self, rows: BellmanRows, cost: Any = None, name: str | None = None) -> None:
         self.rows = rows
         c = check_cost(cost, rows.n_vars)
         a, b = rows.constraint_matrix()
-        super().__init__(a, b, c, name)
+        super().__init__(
+            a, b, c, name, variables=self._variable_blocks(), groups=self._group_blocks()
+        )
+
+    def _variable_blocks(self) -> list[tuple[str, int]]:
+        """The named blocks of the columns (one variable ``v`` here)."""
+        return [(self.variable_name, self.rows.n_vars)]
+
+    def _group_blocks(self) -> list[tuple[str, int]]:
+        """The named blocks of the rows (one group ``bellman`` here)."""
+        return [(self.group_name, self.rows.n_rows)]
 
     def _interpret(
         self, x: np.ndarray, y: np.ndarray

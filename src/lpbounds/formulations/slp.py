@@ -46,6 +46,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
@@ -116,6 +117,14 @@ class SLP(RowsLP):
         ``h_u^i(x)``: ``mu`` normalised over each ``(i, u)`` (0 where ``u`` not in ``U_i``).
     row_of_pair : ndarray (n_states, n_actions)
         The surrogate row of each pair (-1 where the weight is zero).
+    problem : cvxpy.Problem
+        ``min c-bar'v  s.t.  surrogate``.
+    v : cvxpy.Variable (M,)
+        The paper's ``v`` (``variables["v"]``).
+    constraints : dict
+        ``"surrogate"``: eq. 12, one row per ``(i, u)`` with positive weight, normalised
+        (eq. SLPB: ``v(i) >= r_u(i) + lambda sum_j P-tilde_u(i, j) v(j)``), one sparse
+        vector constraint; duals ``result.group_duals["surrogate"]``.
 
     Notes
     -----
@@ -126,6 +135,7 @@ class SLP(RowsLP):
     """
 
     name = "SLP"
+    group_name = "surrogate"
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, mu: Any, cost: Any = None) -> None:
         check_formulation_inputs(mdp, partition, cost=cost, mu=None if isinstance(mu, str) else mu)
@@ -186,6 +196,11 @@ class SLP(RowsLP):
         rewards[o, a] = rows.reward
         allowed[o, a] = True
         return FiniteMDP(succ, probs, rewards, self.mdp.discount, allowed, self.mdp.action_names)
+
+    @property
+    def v(self) -> cp.Variable:
+        """The cvxpy variable ``v`` (one entry per partition)."""
+        return self.variables["v"]
 
     def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
         rp = self.row_of_pair

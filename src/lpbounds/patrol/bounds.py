@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal
 
+import cvxpy as cp
 import numpy as np
 
 from ..errors import ValidationError
@@ -256,6 +257,8 @@ def lemma3_cardinality(params: PatrolParams) -> Lemma3Cardinality:
 
 class _PatrolLP(RowsLP):
     kind: Kind = "upper"
+    #: the paper writes UBLP and LBLP in ``w`` (eq. 26, 29)
+    variable_name = "w"
 
     def __init__(self, params: PatrolParams | None = None, cost: Any = None) -> None:
         self.params = PatrolParams() if params is None else params
@@ -266,6 +269,11 @@ class _PatrolLP(RowsLP):
         from .partitions import partition_components
 
         return partition_components(self.params)
+
+    @property
+    def w(self) -> cp.Variable:
+        """The cvxpy variable ``w`` (one entry per partition)."""
+        return self.variables["w"]
 
 
 class UBLP(_PatrolLP):
@@ -283,6 +291,10 @@ class UBLP(_PatrolLP):
     holds. Built from the partitions alone (:func:`patrol_rows` with ``"upper"``); the
     optimum does not depend on the cost ``c >= 0`` (Fact 1 of :mod:`lpbounds.rows`) and
     :meth:`fixed_point` computes it without a solver.
+
+    As a cvxpy model: :attr:`problem` is ``min c-bar'w  s.t.  bellman``, with the variable
+    ``w`` (``variables["w"]``, the paper's symbol) and the group ``"bellman"`` (the rows of
+    eq. 29, one sparse vector constraint; duals ``result.group_duals["bellman"]``).
     """
 
     name = "UBLP"
@@ -313,6 +325,10 @@ class LBLP(_PatrolLP):
     same actions, the rule drops nothing, and LBLP's rows (one per allowed (partition,
     action)) are those of the masked NLP. Checked state by state against the full MDP
     and against ``NLP`` on ``models/patrol-small.toml`` in the tests.
+
+    As a cvxpy model: :attr:`problem` is ``min c-bar'w  s.t.  bellman``, with the variable
+    ``w`` (``variables["w"]``, the paper's symbol) and the group ``"bellman"`` (the rows of
+    eq. 26, one sparse vector constraint; duals ``result.group_duals["bellman"]``).
     """
 
     name = "LBLP"
