@@ -449,7 +449,15 @@ def _product_layout(q: np.ndarray, n: int, m: int, layout: Any) -> str:
     )
 
 
-def _quantecon_product(cls, R, Q, beta, layout, terminal, action_names):  # type: ignore[no-untyped-def]
+def _quantecon_product(
+    cls: type[FiniteMDP],
+    R: Any,
+    Q: Any,
+    beta: float,
+    layout: Any,
+    terminal: Any,
+    action_names: Any,
+) -> FiniteMDP:
     rew, avail = _quantecon_rewards(R)
     if rew.ndim != 2:
         raise ValidationError(f"R must have shape (n, m) (or (L,) with s_indices); got {rew.shape}")
@@ -506,7 +514,16 @@ def _pair_indices(s_indices: Any, a_indices: Any, n_pairs: int, n: int) -> tuple
     return s, a
 
 
-def _quantecon_sa(cls, R, Q, beta, s_indices, a_indices, terminal, action_names):  # type: ignore[no-untyped-def]
+def _quantecon_sa(
+    cls: type[FiniteMDP],
+    R: Any,
+    Q: Any,
+    beta: float,
+    s_indices: Any,
+    a_indices: Any,
+    terminal: Any,
+    action_names: Any,
+) -> FiniteMDP:
     if sp.issparse(Q):
         if Q.dtype.kind not in "iuf":
             raise ValidationError(f"Q must hold real numbers; got {Q.dtype}")
@@ -615,7 +632,13 @@ def _index_column(
     return col
 
 
-def _pair_rewards(pair_s, pair_a, shape, rewards, reward_rows):  # type: ignore[no-untyped-def]
+def _pair_rewards(
+    pair_s: np.ndarray,
+    pair_a: np.ndarray,
+    shape: tuple[int, int],
+    rewards: Any,
+    reward_rows: Any,
+) -> np.ndarray:
     """Rewards of the pairs from an (n, A) matrix or from [s, a, r] rows."""
     if (rewards is None) == (reward_rows is None):
         raise ValidationError(
@@ -643,17 +666,22 @@ def _pair_rewards(pair_s, pair_a, shape, rewards, reward_rows):  # type: ignore[
         raise ValidationError(f"reward_rows must have shape (K, 3) [s, a, r]; got {rr.shape}")
     rs = _index_column(rr, 0, "state", n, "reward_rows")
     ra = _index_column(rr, 1, "action", m, "reward_rows")
-    lookup = {(int(x), int(u)): k for k, (x, u) in enumerate(zip(pair_s, pair_a, strict=True))}
+    key = pair_s * m + pair_a  # sorted (np.unique in from_transitions)
+    rkey = rs * m + ra
+    pos = np.minimum(np.searchsorted(key, rkey), key.size - 1)
+    absent = key[pos] != rkey
+    if absent.any():
+        i = int(np.flatnonzero(absent)[0])
+        raise ValidationError(
+            f"reward_rows[{i}]: the pair (state {rs[i]}, action {ra[i]}) has no transition"
+        )
+    order = np.argsort(rkey, kind="stable")
+    twice = np.flatnonzero(rkey[order][1:] == rkey[order][:-1])
+    if twice.size:
+        i = int(order[twice[0] + 1])
+        raise ValidationError(f"reward_rows[{i}]: the pair ({rs[i]}, {ra[i]}) has two rewards")
     out = np.full(len(pair_s), np.nan)
-    for i in range(rr.shape[0]):
-        k = lookup.get((int(rs[i]), int(ra[i])))
-        if k is None:
-            raise ValidationError(
-                f"reward_rows[{i}]: the pair (state {rs[i]}, action {ra[i]}) has no transition"
-            )
-        if not np.isnan(out[k]):
-            raise ValidationError(f"reward_rows[{i}]: the pair ({rs[i]}, {ra[i]}) has two rewards")
-        out[k] = rr[i, 2]
+    out[pos] = rr[:, 2]
     miss = np.isnan(out)
     if miss.any():
         k = int(np.flatnonzero(miss)[0])

@@ -200,6 +200,10 @@ def test_from_transitions_per_transition_rewards_match_matrices():
             r"reward_rows\[2\]: the pair \(state 1, action 1\) has no transition",
         ),
         ({"reward_rows": [[0, 0, 1], [1, 2, 3]]}, r"reward_rows\[1, 1\] = 2: the action"),
+        (
+            {"reward_rows": [[0, 0, 1], [1, 0, 2], [0, 0, 3]]},
+            r"reward_rows\[2\]: the pair \(0, 0\) has two rewards",
+        ),
         ({"rewards": np.zeros((2, 2))}, r"rewards must have shape \(2, 1\)"),
     ],
 )
