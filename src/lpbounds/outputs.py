@@ -11,6 +11,10 @@ with SIGINT blocked, so an interrupt cannot fall between its two steps.
 Single files (``--json PATH``) are written to a temporary name in the same folder and
 renamed over ``PATH``.
 
+Every output folder and JSON file records how it was made: :func:`run_metadata` (the
+lpbounds version and git commit, the versions of the dependencies and solvers, the
+machine and the date) goes into ``manifest.json`` and into the files' own summaries.
+
 Every check runs before any computation: :func:`check_output_file` and
 :func:`check_output_dir` probe the folder that will receive the output by creating and
 removing a temporary file there, which is the only reliable test (permission bits say
@@ -24,8 +28,10 @@ import fnmatch
 import hashlib
 import json
 import os
+import platform
 import shutil
 import signal
+import subprocess
 import tempfile
 import threading
 import time
@@ -41,11 +47,126 @@ __all__ = [
     "AtomicDirectory",
     "check_output_dir",
     "check_output_file",
+    "metadata_lines",
+    "run_metadata",
     "write_text_atomic",
 ]
 
 #: Name of the manifest inside a complete output folder.
 MANIFEST = "manifest.json"
+
+#: Packages whose versions every output records (``None`` when not installed).
+DEPENDENCIES: tuple[str, ...] = ("numpy", "scipy", "cvxpy", "highspy", "clarabel", "numba")
+#: Solver packages (beyond the dependencies) whose versions every output records.
+SOLVER_PACKAGES: tuple[str, ...] = ("scs", "ecos", "osqp", "gurobipy", "mosek", "cylp")
+
+
+def _dist_version(name: str) -> str | None:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(name)
+    except PackageNotFoundError:
+        return None
+
+
+def _git(*args: str) -> str | None:
+    """``git args`` in the folder of this source file; None outside a checkout or on error."""
+    try:
+        proc = subprocess.run(
+            ["git", *args],
+            cwd=Path(__file__).resolve().parent,
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return proc.stdout.strip() if proc.returncode == 0 else None
+
+
+def git_commit() -> dict[str, Any] | None:
+    """The commit lpbounds runs from and whether tracked files differ from it; None when
+    it is not a git checkout (an installed wheel)."""
+    top = _git("rev-parse", "--show-toplevel")
+    if top is None or not (Path(top) / "src" / "lpbounds").is_dir():
+        return None  # a checkout of something else that happens to hold site-packages
+    commit = _git("rev-parse", "HEAD")
+    if commit is None:
+        return None
+    changed = _git("status", "--porcelain", "--untracked-files=no")
+    return {"commit": commit, "modified": None if changed is None else bool(changed)}
+
+
+def _machine() -> dict[str, Any]:
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next(
+                (ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")), cpu
+            )
+    except OSError:
+        pass
+    try:
+        memory_gb: float | None = round(
+            os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2**30, 1
+        )
+    except (ValueError, OSError, AttributeError):
+        memory_gb = None
+    return {
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "cpu": cpu,
+        "cpus": os.cpu_count(),
+        "memory_gb": memory_gb,
+    }
+
+
+def run_metadata() -> dict[str, Any]:
+    """How an output was made: lpbounds' version and git commit (``None`` outside a
+    checkout), Python, the dependencies' and solvers' versions, the machine and the date.
+
+    Imports nothing heavy (versions come from the installed package metadata), so a
+    command that never touched cvxpy does not pay for it here. The HiGHS library is the
+    one bundled in ``highspy`` (same version number).
+    """
+    from . import __version__
+
+    return {
+        "lpbounds": __version__,
+        "git": git_commit(),
+        "python": platform.python_version(),
+        "dependencies": {name: _dist_version(name) for name in DEPENDENCIES},
+        "solvers": {
+            name: v
+            for name in ("highspy", "clarabel", "scipy", *SOLVER_PACKAGES)
+            if (v := _dist_version(name)) is not None
+        },
+        "machine": _machine(),
+        "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+
+
+def metadata_lines(meta: dict[str, Any]) -> list[str]:
+    """:func:`run_metadata` as short human-readable lines (for reports)."""
+    git = meta.get("git")
+    where = (
+        "not a git checkout"
+        if not git
+        else f"git commit {git['commit'][:12]}" + (" (modified)" if git.get("modified") else "")
+    )
+    deps = ", ".join(f"{k} {v}" for k, v in meta["dependencies"].items() if v)
+    solvers = ", ".join(f"{k} {v}" for k, v in meta["solvers"].items())
+    m = meta["machine"]
+    mem = f", {m['memory_gb']} GB" if m.get("memory_gb") else ""
+    return [
+        f"lpbounds {meta['lpbounds']} ({where}), Python {meta['python']}",
+        f"dependencies: {deps}",
+        f"solvers: {solvers}",
+        f"machine: {m['cpu']}, {m['cpus']} CPUs{mem}, {m['platform']}",
+        f"date: {meta['date']}",
+    ]
 
 
 def _existing_ancestor(path: Path) -> Path:
@@ -274,7 +395,8 @@ class AtomicDirectory:
 
     # ------------------------------------------------------------------ commit
     def manifest(self, extra: dict[str, Any] | None = None) -> dict[str, Any]:
-        """Every file under the temporary folder: name, size in bytes, SHA-256."""
+        """Every file under the temporary folder (name, size in bytes, SHA-256) and the
+        :func:`run_metadata` of the run (``environment``)."""
         from . import __version__
 
         assert self.tmp is not None, "manifest() outside the with-block"
@@ -291,6 +413,7 @@ class AtomicDirectory:
             "package": "lpbounds",
             "version": __version__,
             "created": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+            "environment": run_metadata(),
             **(extra or {}),
             "files": files,
         }

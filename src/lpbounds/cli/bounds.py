@@ -26,7 +26,7 @@ from rich.table import Table
 from ..dp import solve_exact
 from ..errors import SolverError, ValidationError
 from ..instances import load_instance
-from ..outputs import write_text_atomic
+from ..outputs import run_metadata, write_text_atomic
 from ..tolerances import LP_COMPARE_RTOL
 from ._common import (
     add_model_argument,
@@ -167,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     out["peak_rss_mb"] = _peak_mb()
     _print(out, params)
     if args.json:
-        write_text_atomic(args.json, json.dumps(out, indent=2))
+        write_text_atomic(args.json, json.dumps({**out, "environment": run_metadata()}, indent=2))
     bad = [k for k in ("UBLP", "LBLP") if "lp" in out[k] and not out[k]["lp"]["agrees"]]
     if out["gap"]["negative_count"]:
         console.print("[red]the lower bound exceeds the upper bound somewhere[/red]")

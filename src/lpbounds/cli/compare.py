@@ -12,9 +12,10 @@ from rich.table import Table
 from rich.text import Text
 
 from ..errors import ValidationError
+from ..outputs import MANIFEST, AtomicDirectory
 from ..study import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES, run_study, save_study
 from ..tolerances import LP_CERT_RTOL
-from ._common import console, progress
+from ._common import check_output_dir, console, progress
 
 log = logging.getLogger("lpbounds")
 
@@ -60,7 +61,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         help="requested accuracy relative to max|R|/(1-lambda): ok = certified error within "
         "it (default %(default)g)",
     )
-    p.add_argument("--out", default="compare-out", metavar="DIR", help="output folder")
+    p.add_argument(
+        "--out",
+        default="compare-out",
+        metavar="DIR",
+        help="output folder, replaced as a whole when the study completes, with "
+        "manifest.json (versions, commit, machine, date)",
+    )
     p.add_argument(
         "--jobs", type=int, default=None, metavar="N", help="local processes (default: all cores)"
     )
@@ -126,7 +133,19 @@ def _instance_table(instance: str, rows: Any) -> Table:
     return table
 
 
+#: What ``--out`` holds (an existing folder with anything else is refused, not replaced).
+COMPARE_FILES: tuple[str, ...] = (
+    "study.csv",
+    "study.parquet",
+    "summary.csv",
+    "notes.txt",
+    "study.png",
+    MANIFEST,
+)
+
+
 def run(args: argparse.Namespace) -> int:
+    check_output_dir(args.out, "--out", replaceable=COMPARE_FILES)
     with progress() as prog:
         task = prog.add_task("comparing solvers", total=None, status="")
 
@@ -159,6 +178,9 @@ def run(args: argparse.Namespace) -> int:
     )
     for note in result.notes:
         log.warning("note: %s", note)
-    paths = save_study(result, args.out)
-    console.print("wrote " + ", ".join(str(p) for p in paths.values()))
+    target = AtomicDirectory(args.out, replaceable=COMPARE_FILES)
+    with target as tmp:
+        paths = save_study(result, tmp)
+        out = target.commit({"instances": sorted(set(summary["instance"].astype(str)))})
+    console.print(f"wrote {out}: " + ", ".join(p.name for p in paths.values()) + ", manifest.json")
     return 0

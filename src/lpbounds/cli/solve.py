@@ -1,4 +1,19 @@
-"""``lpbounds solve MODEL``: solve an instance exactly and print value statistics."""
+"""``lpbounds solve MODEL``: solve an instance exactly and print value statistics.
+
+``--out DIR`` keeps the solution (:data:`SOLUTION_FILES`, complete or absent, see
+:mod:`lpbounds.outputs`):
+
+* ``solution.npz``: ``values`` (V*, as computed), ``policy`` (an action index per state,
+  greedy with respect to ``values``), ``lower`` and ``upper``: the certificate, a bracket
+  ``lower <= V* <= upper`` computed from ``values`` alone in floating point
+  (:func:`lpbounds.certificate.certify` on the MDP's Bellman rows); for a model with
+  ``sense = "min"`` or an added sink also ``user_values``, ``user_policy``,
+  ``user_lower``, ``user_upper`` in the user's terms;
+* ``solution.json``: the statistics, the certificate's numbers (residuals, rounding
+  margin, contraction modulus, error bound, width), the action names and how the run was
+  made (:func:`lpbounds.outputs.run_metadata`);
+* ``manifest.json``: the files with their SHA-256 and the same metadata.
+"""
 
 from __future__ import annotations
 
@@ -6,15 +21,18 @@ import argparse
 import json
 import math
 import time
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from rich.table import Table
 
 from ..dp import solve_exact
 from ..instances import load_instance
-from ..outputs import write_text_atomic
+from ..outputs import AtomicDirectory, run_metadata, write_text_atomic
 from ._common import (
     add_model_argument,
+    check_output_dir,
     check_output_file,
     console,
     positive_float,
@@ -30,13 +48,25 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--tol", type=positive_float, default=None, help="residual tolerance (absolute)")
     p.add_argument("--max-iter", type=positive_int, default=100_000)
     p.add_argument("--json", metavar="PATH", help="also write the statistics as JSON")
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="keep the solution: solution.npz (V*, policy, certified lower/upper), "
+        "solution.json and manifest.json; DIR is replaced as a whole",
+    )
     p.set_defaults(func=run)
+
+
+#: What ``--out`` writes (an existing DIR holding anything else is refused).
+SOLUTION_FILES: tuple[str, ...] = ("solution.npz", "solution.json", "manifest.json")
 
 
 def run(args: argparse.Namespace) -> int:
     inst = load_instance(args.model)
     if args.json:
         check_output_file(args.json, "--json")
+    if args.out:
+        check_output_dir(args.out, "--out", replaceable=SOLUTION_FILES)
     t0 = time.perf_counter()
     with progress() as prog:
         task = prog.add_task(f"building {inst.name}", total=None, status="")
@@ -81,5 +111,54 @@ def run(args: argparse.Namespace) -> int:
     )
     console.print(table)
     if args.json:
-        write_text_atomic(args.json, json.dumps(stats, indent=2))
+        write_text_atomic(args.json, json.dumps({**stats, "environment": run_metadata()}, indent=2))
+    if args.out:
+        out = write_solution(args.out, mdp, result, stats)
+        console.print(f"wrote {out}: " + ", ".join(SOLUTION_FILES))
     return 0
+
+
+def write_solution(out: str, mdp: Any, result: Any, stats: dict[str, Any]) -> Path:
+    """Write ``--out``: the solution with its certificate (see the module docstring)."""
+    from ..certificate import certify
+    from ..dp import exact_rows
+
+    cert = certify(exact_rows(mdp), result.values)
+    arrays = {
+        "values": result.values,
+        "policy": np.asarray(result.policy, dtype=np.int64),
+        "lower": cert.lower,
+        "upper": cert.upper,
+    }
+    if mdp.sense == "min" or mdp.sink:
+        lo, hi = mdp.user_bounds(cert.lower, cert.upper)
+        arrays.update(
+            user_values=mdp.user_values(result.values),
+            user_policy=mdp.user_policy(result.policy),
+            user_lower=lo,
+            user_upper=hi,
+        )
+    summary = {
+        **stats,
+        "sense": mdp.sense,
+        "sink": mdp.sink,
+        "action_names": list(mdp.action_names),
+        "certificate": {
+            "what": "lower <= V* <= upper entrywise, certified from values alone "
+            "(lpbounds.certificate.certify on the Bellman rows, rounding included)",
+            "residual_up": cert.residual_up,
+            "residual_down": cert.residual_down,
+            "margin": cert.margin,
+            "modulus": cert.modulus,
+            "error_bound": cert.error_bound,
+            "width": cert.width,
+            "reward_absmax": cert.reward_absmax,
+        },
+        "arrays": {k: {"shape": list(v.shape), "dtype": str(v.dtype)} for k, v in arrays.items()},
+        "environment": run_metadata(),
+    }
+    target = AtomicDirectory(out, replaceable=SOLUTION_FILES)
+    with target as tmp:
+        np.savez(tmp / "solution.npz", **arrays)
+        (tmp / "solution.json").write_text(json.dumps(summary, indent=2) + "\n")
+        return target.commit({"instance": stats["instance"]})

@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..outputs import metadata_lines
 from .summary import ClaimsSummary, Inequality, SandwichSummary, Summary
 
 __all__ = ["markdown_table", "monte_carlo_table", "write_report"]
@@ -104,9 +105,11 @@ def _header(s: Summary) -> list[str]:
         f"# Reproduction of Park et al., Sections 4-6, on `{s.instance}`\n",
         f"Parameters: N = {pr['N']}, stations = {pr['stations']}, D = {pr['D']}, "
         f"Gamma = {pr['Gamma']}, rho = {pr['rho']}, lambda = {pr['discount']}, "
-        f"alpha = {pr['alpha']:.6g}, allow_empty_loiter = {pr['allow_empty_loiter']}. "
-        f"Run on {s.machine['platform']} ({s.machine['cpus']} CPUs), {s.date}; "
+        f"alpha = {pr['alpha']:.6g}, allow_empty_loiter = {pr['allow_empty_loiter']}; "
         f"total {s.seconds_total:.1f} s.\n",
+        "Run with:\n",
+        *[f"- {line}" for line in metadata_lines(s.machine)],
+        "",
         "Figures are numbered as in the paper's source (Figure 1 is the scenario sketch).\n",
     ]
 

@@ -52,7 +52,7 @@ from ..dp import evaluate_policy, exact_rows, greedy_policy, solve_exact, solve_
 from ..errors import ConsistencyError, ValidationError
 from ..formulations.base import resolve_solver
 from ..instances import load_instance
-from ..outputs import MANIFEST, AtomicDirectory
+from ..outputs import MANIFEST, AtomicDirectory, run_metadata
 from ..rows import BellmanRows
 from . import figures as figs
 from .bounds import LBLP, UBLP, lemma3_cardinality, patrol_rows
@@ -325,15 +325,6 @@ def _state_dict(comps: np.ndarray, x: int, stations: Sequence[int]) -> dict[str,
         "w": int(c[1]),
         "d": int(c[2]),
         "tau": {int(s): int(t) for s, t in zip(stations, c[3:], strict=True)},
-    }
-
-
-def _machine() -> dict[str, Any]:
-    return {
-        "python": platform.python_version(),
-        "platform": platform.platform(),
-        "processor": platform.processor() or platform.machine(),
-        "cpus": os.cpu_count(),
     }
 
 
@@ -952,7 +943,7 @@ def reproduce(
         summary = Summary(
             instance=name,
             params=params.to_table(),
-            machine=_machine(),
+            machine=run_metadata(),
             date=time.strftime("%Y-%m-%d %H:%M:%S %Z"),
             n_states=counts.n_states_counted,
             n_partitions=counts.n_partitions_counted,
