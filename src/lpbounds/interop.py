@@ -74,8 +74,8 @@ def _check_discount(discount: Any) -> float:
 
 
 def _terminal_states(terminal: Any, n: int) -> tuple[bool, np.ndarray]:
-    """``(add a sink, mask of the states that end the process)`` from ``terminal=``."""
-    none = np.zeros(n, dtype=bool)
+    """``(add a sink, sorted indices of the states that end the process)`` from ``terminal=``."""
+    none = np.zeros(0, dtype=np.int64)
     if terminal is None or terminal is False:
         return False, none
     if terminal is True:
@@ -84,7 +84,7 @@ def _terminal_states(terminal: Any, n: int) -> tuple[bool, np.ndarray]:
     if arr.dtype == bool:
         if arr.shape != (n,):
             raise ValidationError(f"terminal: a boolean mask needs shape ({n},); got {arr.shape}")
-        return True, arr.copy()
+        return True, np.flatnonzero(arr).astype(np.int64)
     idx = check_array("terminal", arr, integer=True)
     if idx.ndim != 1:
         raise ValidationError(f"terminal must be True, state indices or a mask; got {idx.shape}")
@@ -92,9 +92,7 @@ def _terminal_states(terminal: Any, n: int) -> tuple[bool, np.ndarray]:
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise ValidationError(f"terminal[{k}] = {int(idx[k])} is not a state in [0, {n})")
-    mask = none.copy()
-    mask[idx.astype(np.int64)] = True
-    return True, mask
+    return True, np.unique(idx.astype(np.int64))
 
 
 def _check_rows(
@@ -167,25 +165,66 @@ def model_from_pairs(
     """
     n, m = shape
     sink, term = _terminal_states(terminal, n)
+    _check_coverage(s, term, shape)
+    _check_raw_entries(q, row_name)
     q = sp.csr_matrix(q, dtype=np.float64)
     q.sum_duplicates()
     q.eliminate_zeros()
     q.sort_indices()
-    ends = term[s]
+    ends = np.isin(s, term)
     if ends.any():  # a terminal state's actions all move to the sink after their reward
         keep = np.repeat(~ends, np.diff(q.indptr)).astype(np.float64)
         q = sp.csr_matrix((q.data * keep, q.indices, q.indptr), shape=q.shape)
         q.eliminate_zeros()
-    idle = term.copy()
-    idle[s] = False  # a terminal state listed without any action gets action 0 (reward 0)
-    if idle.any():
-        extra = np.flatnonzero(idle)
+    extra = np.setdiff1d(term, s)  # a terminal state without any action gets action 0 (reward 0)
+    if extra.size:
         s, a = np.concatenate([s, extra]), np.concatenate([a, np.zeros_like(extra)])
         r = np.concatenate([r, np.zeros(extra.size)])
         q = sp.vstack([q, sp.csr_matrix((extra.size, n))], format="csr")
         row_name = _with_terminal_rows(row_name, len(s) - extra.size, s)
     missing = _check_rows(q, (s, a), row_name, sink)
     return _assemble(cls, q, s, a, r, missing, (n, m), discount, sink, sense, action_names)
+
+
+def _check_size(shape: tuple[int, int]) -> None:
+    """Refuse index ranges beyond the dense (state, action) layout (before any product)."""
+    n, m = shape
+    if n * m > 2**34:  # Python ints: no overflow here
+        raise ValidationError(
+            f"{n} states x {m} actions (from the largest indices given) is beyond the dense "
+            f"(state, action) layout of FiniteMDP ({n * m:.3g} pairs > 2**34)"
+        )
+
+
+def _check_coverage(s: np.ndarray, term: np.ndarray, shape: tuple[int, int]) -> None:
+    """Every state needs an action (checked before anything of size n is allocated)."""
+    n, _ = shape
+    _check_size(shape)
+    have = np.union1d(s, term)
+    if have.size < n:
+        gap = np.flatnonzero(have != np.arange(have.size))
+        x = int(gap[0]) if gap.size else int(have.size)
+        raise ValidationError(
+            f"state {x} has no allowed action ({n - have.size} such states): no pair lists it"
+            "; a state where the process ends can be passed in terminal="
+        )
+
+
+def _check_raw_entries(q: Any, row_name: Callable[[int], str]) -> None:
+    """Negative or non-finite stored entries, before duplicates are summed (they could hide)."""
+    if not sp.issparse(q):
+        return
+    coo = q.tocoo()
+    for bad, what in (
+        (~np.isfinite(coo.data), "not finite"),
+        (coo.data < -PROBABILITY_NEGATIVE_ATOL, "negative"),
+    ):
+        if bad.any():
+            j = int(np.flatnonzero(bad)[0])
+            raise ValidationError(
+                f"{row_name(int(coo.row[j]))}: the probability {coo.data[j]} of next state "
+                f"{int(coo.col[j])} is {what}"
+            )
 
 
 def _with_terminal_rows(
@@ -257,6 +296,13 @@ def _items(x: Any, name: str) -> list[Any]:
         raise ValidationError(f"{name} must be a sequence of A matrices") from exc
 
 
+def _row_of(a: int) -> Callable[[int], str]:
+    def name(x: int) -> str:
+        return f"row {x} of P[{a}]"
+
+    return name
+
+
 def matrix_list(P: Any, name: str) -> list[sp.csr_matrix]:
     """``A`` CSR matrices from any of pymdptoolbox's forms of ``P`` (or of matrix ``R``)."""
     if sp.issparse(P) or isinstance(P, (str, bytes)) or P is None:
@@ -269,6 +315,8 @@ def matrix_list(P: Any, name: str) -> list[sp.csr_matrix]:
         if sp.issparse(m):
             if m.dtype.kind not in "iuf":
                 raise ValidationError(f"{name}[{a}] must hold real numbers; got {m.dtype}")
+            if name == "P":  # before the CSR conversion sums duplicate entries
+                _check_raw_entries(m, _row_of(a))
         else:
             m = check_array(f"{name}[{a}]", m, finite=False)
             if m.ndim != 2:
@@ -286,7 +334,9 @@ def _reward_kind(R: Any) -> str:
     if sp.issparse(R):
         return "array"
     if isinstance(R, np.ndarray):
-        return "matrices" if R.dtype == object and R.ndim == 1 else "array"
+        if R.dtype == object and R.ndim == 1:  # matrices, or numbers (state rewards)
+            return "matrices" if any(sp.issparse(x) or np.ndim(x) == 2 for x in R) else "array"
+        return "array"
     if isinstance(R, Mapping):
         return "matrices"
     if isinstance(R, (list, tuple)) and any(sp.issparse(x) for x in R):
@@ -502,6 +552,7 @@ def _pair_indices(s_indices: Any, a_indices: Any, n_pairs: int, n: int) -> tuple
             raise ValidationError(f"{name}[{k}] = {int(arr[k])} is out of range {rng}")
     s, a = s.astype(np.int64), a.astype(np.int64)
     m = int(a.max()) + 1 if a.size else 1
+    _check_size((n, m))
     key = s * m + a
     order = np.argsort(key, kind="stable")
     dup = np.flatnonzero(key[order][1:] == key[order][:-1])
@@ -534,11 +585,15 @@ def _quantecon_sa(
             raise ValidationError(f"Q must be 2-d (L, n) with s_indices; got {qd.shape}")
         q = sp.csr_matrix(qd)
     n_pairs, n = q.shape
+    if n_pairs == 0 or n == 0:
+        raise ValidationError(f"Q has no pair or no state (shape {q.shape})")
     rew, avail = _quantecon_rewards(R)
     if rew.shape != (n_pairs,):
         raise ValidationError(f"R must have shape ({n_pairs},) (one per row of Q); got {rew.shape}")
     s, a = _pair_indices(s_indices, a_indices, n_pairs, n)
     m = int(a.max()) + 1
+    if sp.issparse(Q):  # before the CSR conversion sums duplicate entries
+        _check_raw_entries(Q, lambda k: f"Q[{k}, :] (state {s[k]}, action {a[k]})")
     keep = np.flatnonzero(avail)
     return model_from_pairs(
         cls, q[keep], s[keep], a[keep], rew[keep], (n, m), beta,
@@ -721,9 +776,14 @@ def from_transitions(
     nxt = _index_column(tr, 2, "next state", hi_s)
     n = hi_s if hi_s is not None else int(max(s.max(), nxt.max())) + 1
     m = hi_a if hi_a is not None else int(a.max()) + 1
+    _check_size((n, m))
     key, first_row, inv = np.unique(s * m + a, return_index=True, return_inverse=True)
     pair_s, pair_a = key // m, key % m
     p = tr[:, 3]
+    neg = p < -PROBABILITY_NEGATIVE_ATOL
+    if neg.any():
+        i = int(np.flatnonzero(neg)[0])
+        raise ValidationError(f"rows[{i}, 3] = {p[i]}: a probability is negative")
     q = sp.csr_matrix((p, (inv, nxt)), shape=(key.size, n))  # repeated next states add up
     if tr.shape[1] == 5:
         if rewards is not None or reward_rows is not None:

@@ -65,6 +65,13 @@ def test_R_as_a_nested_list_of_shape_n_by_A():
         lb.FiniteMDP.from_matrices(P, R.T.tolist(), 0.9)
 
 
+def test_object_arrays_of_numbers_are_arrays():
+    rng = np.random.default_rng(8)
+    P, R = _random_model(rng, 4, 2)
+    mdp = lb.FiniteMDP.from_pymdptoolbox(P, np.array(list(R[:, 0]), dtype=object), 0.9)
+    np.testing.assert_array_equal(mdp.rewards, np.repeat(R[:, :1], 2, axis=1))
+
+
 def test_dict_of_matrices_and_sparse_R():
     rng = np.random.default_rng(4)
     P, R = _random_model(rng, 5, 3)
@@ -234,3 +241,47 @@ def test_repr_shows_sense_and_sink_only_when_set():
     mdp = lb.FiniteMDP.from_matrices([np.eye(2) * 0.5], [1.0, 2.0], 0.9, terminal=True, sense="min")
     assert repr(mdp).endswith("sense='min', sink=True)")
     assert "sense" not in repr(lb.FiniteMDP.from_matrices([np.eye(2)], [1.0, 2.0], 0.9))
+
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        # a negative probability must not hide behind a duplicate that sums to one
+        (
+            lambda: lb.FiniteMDP.from_transitions([[0, 0, 0, -1], [0, 0, 0, 2]], 0.9, [[0]]),
+            r"rows\[0, 3\] = -1.0: a probability is negative",
+        ),
+        (
+            lambda: lb.FiniteMDP.from_quantecon(
+                [1.0], sp.coo_matrix(([-1.0, 2.0], ([0, 0], [0, 0])), shape=(1, 1)), 0.9, [0], [0]
+            ),
+            r"Q\[0, :\] \(state 0, action 0\): the probability -1.0 of next state 0 is negative",
+        ),
+        # an index of 2**40 is refused before anything of that size is allocated
+        (
+            lambda: lb.FiniteMDP.from_transitions([[0, 0, 2**40, 1]], 0.9, reward_rows=[[0, 0, 1]]),
+            r"1099511627777 states x 1 actions .* beyond the dense",
+        ),
+        (
+            lambda: lb.FiniteMDP.from_quantecon([1.0], [[1.0]], 0.9, [0], [2**62]),
+            r"4611686018427387905 actions .* beyond the dense",
+        ),
+        (
+            lambda: lb.FiniteMDP.from_transitions(
+                [[0, 0, 0, 1.0], [2, 0, 2, 1.0]], 0.9, reward_rows=[[0, 0, 1], [2, 0, 1]]
+            ),
+            r"state 1 has no allowed action .* terminal=",
+        ),
+        (lambda: lb.FiniteMDP.from_quantecon([], np.zeros((0, 2)), 0.9, [], []), "no pair"),
+    ],
+    ids=["hidden-negative", "hidden-negative-coo", "huge-state", "huge-action", "gap", "empty"],
+)
+def test_hostile_inputs(build, message):
+    with pytest.raises(ValidationError, match=message):
+        build()
+
+
+def test_negative_entry_of_a_coo_P_is_not_summed_away():
+    hidden = sp.coo_matrix(([-1.0, 2.0, 1.0], ([0, 0, 1], [0, 0, 1])), shape=(2, 2))
+    with pytest.raises(ValidationError, match=r"row 0 of P\[0\]: the probability -1.0 of next"):
+        lb.FiniteMDP.from_pymdptoolbox([hidden], [0.0, 0.0], 0.9)
