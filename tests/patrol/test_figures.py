@@ -24,24 +24,25 @@ def _is_png(p: Path) -> bool:
     return data[:8] == PNG_MAGIC and len(data) > 5_000
 
 
-def test_ordered_states_selection(model):
+def test_ordered_states_are_chains_of_the_partial_order(model):
+    """Figure 3 shows, per station, a chain: all stations alerted, d = 0, w = +1, the UAV at
+    the station, each state's delays componentwise >= the previous one's, from (2, 1, 1)
+    to (Gamma, Gamma, Gamma), m states per maximum delay."""
     comps = model.state_components()
     st = model.params.stations
+    m, gamma = len(st), model.params.Gamma
     sel = figs.select_ordered_states(comps, st)
     assert sorted(sel) == sorted(st)
     for s, idx in sel.items():
-        want = {
-            x
-            for x, c in enumerate(comps)
-            if c[0] == s and c[1] == 1 and c[2] == 0 and min(c[3:]) >= 1 and max(c[3:]) >= 2
-        }
-        assert set(idx.tolist()) == want
-        # never a state after one that it is dominated by (the order is a linear extension)
-        tau = comps[idx, 3:]
-        for k in range(len(idx)):
-            later = tau[k + 1 :]
-            assert not ((later <= tau[k]).all(axis=1) & (later != tau[k]).any(axis=1)).any()
-        assert (np.diff(tau.max(axis=1)) >= 0).all()
+        c = comps[idx]
+        assert (c[:, 0] == s).all() and (c[:, 1] == 1).all() and (c[:, 2] == 0).all()
+        tau = c[:, 3:]
+        assert (tau >= 1).all()
+        assert tau[0].tolist() == [2] + [1] * (m - 1) and tau[-1].tolist() == [gamma] * m
+        steps = np.diff(tau, axis=0)
+        assert ((steps >= 0).all(axis=1) & (steps.sum(axis=1) == 1)).all()  # one step up
+        assert len(idx) == m * (gamma - 1)
+        assert np.bincount(tau.max(axis=1))[2:].tolist() == [m] * (gamma - 1)
 
 
 def test_min_value_partition_selection(model):
@@ -97,3 +98,111 @@ def test_every_plot_writes_a_png(model, tmp_path):
     ]
     for f in out:
         assert _is_png(f), f
+
+
+# ---------------------------------------------------------------------- what each figure claims
+@pytest.fixture(scope="module")
+def small():
+    """patrol-small with V* (exact DP), the UBLP/LBLP fixed points and V_sub computed here."""
+    import lpbounds as lb
+    from lpbounds.patrol.bounds import patrol_rows
+    from lpbounds.patrol.instance import params_from_instance
+
+    params = params_from_instance(lb.load_instance("models/patrol-small.toml"))
+    pm = PatrolModel(params)
+    mdp = pm.mdp()
+    vs = lb.solve_exact(mdp, "pi")
+    up = lb.solve_exact(patrol_rows(params, "upper"), "pi")
+    low = lb.solve_exact(patrol_rows(params, "lower"), "pi")
+    labels = np.asarray(pm.partition().labels)
+    # V_sub: the policy greedy w.r.t. Phi w*, evaluated by a dense linear solve
+    succ = np.asarray(mdp.successors)
+    probs = np.broadcast_to(np.asarray(mdp.probabilities_full()), succ.shape)
+    phi_low = low.values[labels]
+    q = np.asarray(mdp.rewards) + mdp.discount * (probs * phi_low[succ]).sum(axis=2)
+    pol = np.where(np.asarray(mdp.allowed), q, -np.inf).argmax(axis=1)
+    n = mdp.n_states
+    pmat = np.zeros((n, n))
+    rows = np.arange(n)
+    np.add.at(
+        pmat, (np.repeat(rows, succ.shape[2]), succ[rows, pol].ravel()), probs[rows, pol].ravel()
+    )
+    vsub = np.linalg.solve(np.eye(n) - mdp.discount * pmat, np.asarray(mdp.rewards)[rows, pol])
+    tol = 4 * max(vs.error_bound, up.error_bound, low.error_bound) + 1e-12
+    return {
+        "params": params, "pm": pm, "comps": pm.state_components(),
+        "pcomps": pm.partition_components(), "labels": labels, "vstar": vs.values,
+        "upper": up.values, "lower": low.values, "vsub": vsub, "tol": tol,
+    }  # fmt: skip
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    """The figures the plot functions draw (their axes' lines), instead of PNG files."""
+    figures = []
+
+    def keep(fig, path):
+        figures.append(fig)
+        return Path(path)
+
+    monkeypatch.setattr(figs, "_save", keep)
+    return figures
+
+
+def _lines(fig, prefix):
+    return [
+        ln for ax in fig.axes for ln in ax.get_lines() if str(ln.get_label()).startswith(prefix)
+    ]
+
+
+def test_figure3_plots_non_increasing_values_along_each_chain(small, captured):
+    st = small["params"].stations
+    figs.plot_ordered_states(small["comps"], st, small["vstar"], "f3.png")
+    lines = _lines(captured[0], "UAV at station")
+    assert len(lines) == len(st)
+    m, gamma = len(st), small["params"].Gamma
+    for ln in lines:
+        y = np.asarray(ln.get_ydata())
+        assert y.size == m * (gamma - 1)
+        assert (np.diff(y) <= small["tol"]).all(), np.diff(y).max()
+        assert y[0] - y[-1] > 100 * small["tol"]  # it does decrease, not only stay flat
+    title = captured[0].axes[0].get_title()
+    assert "all stations alerted" in title and "d = 0" in title and "w = +1" in title
+
+
+def test_figure4_min_over_each_partition_is_non_increasing(small, captured):
+    st = small["params"].stations
+    figs.plot_min_value_partitions(small["comps"], st, small["vstar"], "f4.png")
+    ax = captured[0].axes[0]
+    mins = [c for c in ax.collections]  # hlines: one LineCollection per partition
+    levels = [float(np.asarray(c.get_segments())[0][0][1]) for c in mins]
+    assert len(levels) == small["params"].Gamma - 1
+    assert (np.diff(levels) <= small["tol"]).all()
+    # each green level is the least V* of the states plotted in its partition
+    idx, taubar, _ = figs.select_min_value_partitions(small["comps"], st)
+    want = [small["vstar"][idx[taubar == t]].min() for t in np.unique(taubar)]
+    assert np.allclose(levels, want, rtol=0, atol=1e-15)
+
+
+def test_figure5_bounds_sandwich_every_plotted_state(small, captured):
+    p = small["params"]
+    figs.plot_bounds(
+        small["pcomps"], small["labels"], small["vstar"], small["upper"], small["lower"],
+        p.N, "f5.png",
+    )  # fmt: skip
+    (dots,) = _lines(captured[0], "V*(x)")
+    (up,) = _lines(captured[0], "V_up")
+    (low,) = _lines(captured[0], "V_low")
+    x, y = np.asarray(dots.get_xdata()).astype(int), np.asarray(dots.get_ydata())
+    assert x.size > 0
+    up_y, low_y = np.asarray(up.get_ydata()), np.asarray(low.get_ydata())
+    assert (low_y[x - 1] <= y + small["tol"]).all() and (y <= up_y[x - 1] + small["tol"]).all()
+
+
+def test_figure6_vsub_never_exceeds_vstar(small, captured):
+    p = small["params"]
+    figs.plot_vsub(small["pcomps"], small["labels"], small["vstar"], small["vsub"], p.N, "f6.png")
+    (vs,) = _lines(captured[0], "V*")
+    (sub,) = _lines(captured[0], "V_sub")
+    assert np.asarray(vs.get_ydata()).size > 0
+    assert (np.asarray(sub.get_ydata()) <= np.asarray(vs.get_ydata()) + small["tol"]).all()

@@ -3,9 +3,10 @@ r"""Figures 2-7 of the paper (Sections 4-6) as PNG files (matplotlib, Agg backen
 Numbering follows the paper's LaTeX source (Figure 1 is the scenario sketch):
 
 * Figure 2 (``fig:info``): information gain ``I(d)`` against the dwell ``d``;
-* Figure 3 (``fig:MonoVal``): ``V*`` along partially ordered states: every station has an
-  alert (``A_j = 1``), ``d = 0``, ``w = +1``, the UAV at a station, ``taubar = 2..Gamma``;
-  dotted lines separate the partitions;
+* Figure 3 (``fig:MonoVal``): ``V*`` along chains of partially ordered states: every
+  station has an alert (``A_j = 1``), ``d = 0``, ``w = +1``, the UAV at a station, the
+  delays raised one station at a time from ``(2, 1, .., 1)`` to ``(Gamma, .., Gamma)``
+  (:func:`ordered_delays`), so ``taubar = 2..Gamma``; dotted lines separate the partitions;
 * Figure 4 (``fig:MonoValPart``): ``V*`` of every state and ``min V*`` (green) of the
   partitions ``A = 1 0 ... 0 1`` (first and last station alerted), ``d = 0``, ``w = +1``,
   ``l`` = the first station, ``taubar = 2..Gamma``;
@@ -32,6 +33,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 __all__ = [
+    "ordered_delays",
     "plot_bounds",
     "plot_histograms",
     "plot_information",
@@ -72,47 +74,92 @@ def plot_information(params: Any, path: str | Path) -> Path:
 
 
 # ---------------------------------------------------------------------- Figure 3
-def select_ordered_states(comps: np.ndarray, stations: Any) -> dict[int, np.ndarray]:
-    """States of Figure 3 per station node ``l``, ordered left to right.
+def ordered_delays(m: int, gamma: int) -> np.ndarray:
+    """The delay vectors of Figure 3's chain, shape ``(m (Gamma - 1), m)``.
 
-    All ``tau_j >= 1``, ``d = 0``, ``w = +1``, ``l = station``, ``taubar >= 2``; ordered by
-    ``taubar`` (the partition), then by the sum of the delays, then lexicographically,
-    so a state never comes after one that dominates it.
+    From ``(2, 1, ..., 1)`` to ``(Gamma, ..., Gamma)``, raising one station's delay by one
+    at a time in station order: ``(t, .., t, t-1, .., t-1)`` with ``k = 1..m`` leading
+    ``t``'s, for ``t = 2..Gamma``. Each vector is componentwise above the previous one,
+    so the states form a chain of the partial order and Claim 2 makes ``V*`` along them
+    non-increasing. The ``m`` states of one ``t`` share the maximum delay ``taubar = t``,
+    hence the partition.
+    """
+    rows = [[t] * k + [t - 1] * (m - k) for t in range(2, gamma + 1) for k in range(1, m + 1)]
+    return np.array(rows, dtype=np.int64).reshape(-1, m)
+
+
+def select_ordered_states(comps: np.ndarray, stations: Any) -> dict[int, np.ndarray]:
+    """States of Figure 3: one chain per station node ``l``, in chain order.
+
+    Every station alerted, ``d = 0``, ``w = +1``, the UAV at ``l``, and the delays of
+    :func:`ordered_delays` (``Gamma`` = the largest delay in ``comps``). A delay vector
+    the model does not hold is left out (what remains is still a chain).
     """
     tau = comps[:, 3:].astype(np.int64)
-    taubar = tau.max(axis=1)
-    base = (comps[:, 2] == 0) & (comps[:, 1] == 1) & (tau >= 1).all(axis=1) & (taubar >= 2)
+    m = tau.shape[1]
+    gamma = int(tau.max(initial=0))
+    chain = ordered_delays(m, gamma)
     out: dict[int, np.ndarray] = {}
     for s in stations:
-        idx = np.flatnonzero(base & (comps[:, 0] == s))
-        keys = [tau[idx, j] for j in range(tau.shape[1] - 1, -1, -1)]
-        order = np.lexsort((*keys, tau[idx].sum(axis=1), taubar[idx]))
-        out[int(s)] = idx[order]
+        cand = np.flatnonzero((comps[:, 0] == s) & (comps[:, 1] == 1) & (comps[:, 2] == 0))
+        where = {tuple(t): int(x) for x, t in zip(cand, tau[cand].tolist(), strict=True)}
+        hits = [where.get(tuple(t)) for t in chain.tolist()]
+        out[int(s)] = np.array([h for h in hits if h is not None], dtype=np.int64)
     return out
 
 
 def plot_ordered_states(
     comps: np.ndarray, stations: Any, vstar: np.ndarray, path: str | Path
 ) -> Path:
-    """Figure 3: ``V*`` along the ordered states of :func:`select_ordered_states`."""
+    """Figure 3: ``V*`` along the chains of :func:`select_ordered_states`, one curve per
+    UAV location, dotted lines where the maximum delay (the partition) changes."""
     sel = select_ordered_states(comps, stations)
-    n = len(sel)
-    ncol = 2 if n > 1 else 1
-    nrow = (n + ncol - 1) // ncol
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 3.2 * nrow), squeeze=False)
-    for ax, (s, idx) in zip(axes.ravel(), sel.items(), strict=False):
-        taubar = comps[idx, 3:].max(axis=1)
-        x = np.arange(idx.size)
-        ax.plot(x, vstar[idx], lw=0.4, color="tab:blue", rasterized=True)
-        for b in np.flatnonzero(np.diff(taubar)) + 0.5:
-            ax.axvline(b, color="grey", ls=":", lw=0.6)
-        ax.set_title(f"l = {s}: all stations alerted, d = 0, w = +1")
-        ax.set_xlabel(r"states ordered by max delay $\bar\tau$ = 2..Γ (dotted: partitions)")
-        ax.set_ylabel("V*")
-        ax.set_xlim(0, max(1, idx.size - 1))
-    for ax in axes.ravel()[n:]:
-        ax.axis("off")
-    fig.suptitle("Figure 3: V* decreases along partially ordered states")
+    m = comps.shape[1] - 3
+    fig, ax = plt.subplots(figsize=(8.0, 4.6))
+    markers = "osD^v<>px*"
+    taubar = np.zeros(0, dtype=np.int64)
+    for k, (s, idx) in enumerate(sel.items()):
+        ax.plot(
+            np.arange(idx.size),
+            vstar[idx],
+            marker=markers[k % 10],
+            ms=3.5,
+            lw=1.0,
+            label=f"UAV at station l = {s}",
+        )
+        if idx.size > taubar.size:
+            taubar = comps[idx, 3:].max(axis=1)
+    if taubar.size:
+        levels, start = np.unique(taubar, return_index=True)
+        for b in start[1:]:
+            ax.axvline(b - 0.5, color="grey", ls=":", lw=0.8)
+        centres = (start + np.r_[start[1:], taubar.size] - 1) / 2
+        step = max(1, len(levels) // 14)
+        top = ax.secondary_xaxis("top")
+        top.set_xticks(centres[::step], [str(v) for v in levels[::step]])
+        top.tick_params(length=0, labelsize=8)
+        top.set_xlabel(r"maximum delay $\bar\tau$ (partition), dotted lines: boundaries")
+        ax.set_xlim(-0.5, taubar.size - 0.5)
+    if 0 < taubar.size <= 24:  # label each state by its delays where they fit
+        longest = max(sel.values(), key=lambda i: i.size)
+        ax.set_xticks(
+            np.arange(taubar.size),
+            [",".join(map(str, t)) for t in comps[longest, 3:].tolist()],
+            rotation=90 if m > 3 else 0,
+            fontsize=7,
+        )
+    ax.set_xlabel(
+        "states in chain order: station delays raised one at a time, "
+        f"({', '.join(['2'] + ['1'] * (m - 1))}) → (Γ, ..., Γ)"
+    )
+    ax.set_ylabel("V*")
+    ax.set_title(
+        "Figure 3: V* is non-increasing along ordered states\n"
+        "(all stations alerted, d = 0, w = +1; each state's delays ≥ the previous one's)",
+        fontsize=10,
+    )
+    ax.grid(alpha=0.25, axis="y")
+    ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     return _save(fig, path)
 
@@ -152,7 +199,9 @@ def plot_min_value_partitions(
     idx, taubar, a = select_min_value_partitions(comps, stations)
     fig, ax = plt.subplots(figsize=(8.0, 4.2))
     x = np.arange(idx.size)
-    ax.plot(x, vstar[idx], ".", ms=3, color="tab:blue", label="V*(x), x in the partition")
+    ax.plot(
+        x, vstar[idx], "o", ms=3.5, color="tab:blue", zorder=3, label="V*(x), x in the partition"
+    )
     if idx.size:
         levels, start = np.unique(taubar, return_index=True)
         ends = np.r_[start[1:], idx.size]
@@ -179,7 +228,12 @@ def plot_min_value_partitions(
     code = "".join(str(v) for v in a)
     ax.set_xlabel(r"states grouped by partition, max delay $\bar\tau$ = 2..Γ (labels on top)")
     ax.set_ylabel("V*")
-    ax.set_title(f"Figure 4: A = {code}, d = 0, w = +1, l = {stations[0]}", pad=14)
+    ax.set_title(
+        f"Figure 4: min V* over a partition is non-increasing in the maximum delay\n"
+        f"(states with alerts A = {code}, d = 0, w = +1, l = {stations[0]})",
+        fontsize=10,
+        pad=14,
+    )
     ax.legend(loc="lower left", fontsize=8)
     fig.tight_layout()
     return _save(fig, path)
@@ -216,7 +270,16 @@ def plot_bounds(
     pos[parts] = np.arange(parts.size)
     member = pos[labels]
     xs = np.flatnonzero(member >= 0)
-    ax.plot(member[xs] + 1, vstar[xs], ".", ms=3, color="tab:blue", alpha=0.6, label="V*(x)")
+    ax.plot(
+        member[xs] + 1,
+        vstar[xs],
+        "o",
+        ms=3.5,
+        color="tab:blue",
+        alpha=0.7,
+        zorder=3,
+        label="V*(x), x in the partition",
+    )
     k = np.arange(1, parts.size + 1)
     ax.plot(k, upper[parts], "v-", color="tab:red", ms=4, lw=1, label="V_up = Φ v* (UBLP)")
     ax.plot(k, lower[parts], "^-", color="tab:green", ms=4, lw=1, label="V_low = Φ w* (LBLP)")
@@ -226,8 +289,12 @@ def plot_bounds(
         f"partition number (1..{N}: clockwise l = 0..{N - 1}; {N + 1}..{2 * N}: counter-clockwise)"
     )
     ax.set_ylabel("value")
-    ax.set_title(r"Figure 5: bounds vs V* (d = 0, $\bar\tau$ = 2, all stations alerted)")
-    ax.legend(loc="best", fontsize=8)
+    ax.set_title(
+        "Figure 5: V_low ≤ V* ≤ V_up on every state of the partitions\n"
+        r"(d = 0, $\bar\tau$ = 2, all stations alerted)",
+        fontsize=10,
+    )
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     return _save(fig, path)
@@ -259,8 +326,13 @@ def plot_vsub(
     ax.set_ylabel("value")
     ax.legend(fontsize=8)
     ax.set_title(r"Figure 6: V_sub vs V* (clockwise, d = 0, $\bar\tau$ = 2, all alerted)")
+    ax2.axhline(0.0, color="black", lw=0.6)
     ax2.plot(x, vstar[xs] - vsub[xs], ".", ms=3, color="tab:purple")
     ax2.set_ylabel("V* − V_sub")
+    ax2.set_title(
+        "V* − V_sub ≥ 0 up to the DP error bounds of both (V_sub is a policy's value)",
+        fontsize=8,
+    )
     ax2.set_xlabel("states, grouped by partition l = 0..N-1 (dotted)")
     bounds = np.flatnonzero(np.diff(member[xs])) + 0.5
     for a_ in (ax, ax2):
