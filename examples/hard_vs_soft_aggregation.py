@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     soft_spread = float((soft.max(axis=0) - soft.min(axis=0)).max())
     hard_spread = float((hard.max(axis=0) - hard.min(axis=0)).max())
     print(f"MDP: {mdp.n_states} states (seed {ex.seed}); soft basis with {basis.shape[1]} features")
-    print(f"soft aggregation (ALP): optimum moves by up to {soft_spread:.4f} over the sweep")
+    print(f"soft aggregation (ALP): optimum moves by up to {soft_spread:.4g} over the sweep")
     print(f"hard aggregation (RLP): optimum moves by up to {hard_spread:.1e} (Theorem 1)")
     print(
         f"both are upper bounds: min(ALP - V*) = {(soft - vstar).min():.2e}, "
@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     below = int((v_hard < v_big - tol).sum())
     print(
         f"SLP(uniform mu) on 300 states / 30 partitions: below V* at {below} states "
-        f"(by up to {float((v_big - v_hard).max()):.3f}): an approximation, not a bound"
+        f"(by up to {float((v_big - v_hard).max()):.4g}): an approximation, not a bound"
     )
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)

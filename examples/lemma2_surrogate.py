@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         a, b = list(mus.values())[:2]
         print(f"the duals of the first two solvers differ by up to {np.abs(a - b).max():.2e}")
     uniform = SLP(mdp, part, mu="uniform").fixed_point()
-    print(f"uniform mu (hard aggregation): max|v - v*| = {np.abs(uniform - vstar).max():.3f}")
+    print(f"uniform mu (hard aggregation): max|v - v*| = {np.abs(uniform - vstar).max():.3e}")
     print(f"tolerance {tol:.1e}:", "Lemma 2 holds" if ok else "CHECK FAILED")
     return 0 if ok else 1
 

@@ -64,7 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     minv = part.aggregate(vstar, "min")
     margin = float((minv - exact.values).min())
     ok &= margin >= -tol
-    print(f"min over partitions of (min_S_i V* - w*) = {margin:.4f} (a lower bound: >= 0)")
+    print(f"min over partitions of (min_S_i V* - w*) = {margin:.3e} (a lower bound: >= 0)")
 
     rounds = [e.iteration for e in cp.log]
     fig, ax = plt.subplots(figsize=(7, 4))

@@ -49,9 +49,9 @@ def main(argv: list[str] | None = None) -> int:
     lab = part.labels
     lower_margin = float((vstar - low_fp[lab]).min())
     upper_margin = float((up_fp[lab] - vstar).min())
-    print(f"min (V* - w*) = {lower_margin:.4f}, min (v* - V*) = {upper_margin:.4f}")
+    print(f"min (V* - w*) = {lower_margin:.3e}, min (v* - V*) = {upper_margin:.3e}")
     gap = up_fp - low_fp
-    print(f"policy-free gap v* - w* per partition: mean {gap.mean():.4f}, max {gap.max():.4f}")
+    print(f"policy-free gap v* - w* per partition: mean {gap.mean():.3e}, max {gap.max():.3e}")
 
     minv, maxv = part.aggregate(vstar, "min"), part.aggregate(vstar, "max")
     order = np.argsort(minv, kind="stable")
