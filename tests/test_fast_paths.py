@@ -5,6 +5,10 @@ The post-decision form (:class:`lpbounds.rows.PostDecisionRows`) is used automat
 FiniteMDP that has it. Passing ``exact_rows(mdp)`` forces the plain row kernels. The fast
 path claims the *same arithmetic*, so the tests below ask for bit-identical results, and
 compare both with plain-numpy references from ``conftest``.
+
+Every test runs twice, on the numpy twins of the kernels (what small models use) and on
+the compiled kernels (what large ones use; :mod:`lpbounds._backend`), and the tests at the
+end compare the two paths with each other, bit for bit.
 """
 
 from __future__ import annotations
@@ -13,15 +17,26 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lpbounds as lb
+from lpbounds import _backend, _kernels, _npkernels
 from lpbounds.dp import exact_rows, post_decision_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
 from lpbounds.rows import PostDecisionRows
 
 from .conftest import reference_bellman, reference_solve
+
+NUMPY = 10**18  # SMALL_READS that sends every model to the numpy twins
+COMPILED = 0  # ... and to the compiled kernels
+
+
+@pytest.fixture(params=["numpy", "compiled"])
+def kernel_path(request, monkeypatch):
+    """Run a test on both kernel paths."""
+    monkeypatch.setattr(_backend, "SMALL_READS", NUMPY if request.param == "numpy" else COMPILED)
+    return request.param
 
 
 def post_decision_mdp(
@@ -62,6 +77,7 @@ def assert_same_result(fast: lb.DPResult, plain: lb.DPResult, rows: lb.BellmanRo
     assert fast.tol == plain.tol
 
 
+@pytest.mark.usefixtures("kernel_path")
 @pytest.mark.parametrize("kw", PATROLS)
 @pytest.mark.parametrize("method", ["vi", "mpi"])
 def test_patrol_fast_solve_equals_plain_bit_for_bit(kw, method):
@@ -80,6 +96,7 @@ def test_patrol_fast_solve_equals_plain_bit_for_bit(kw, method):
     assert true_res == pytest.approx(fast.residual, abs=1e-13), "residual not the true one"
 
 
+@pytest.mark.usefixtures("kernel_path")
 @pytest.mark.parametrize("seed", range(3))
 @pytest.mark.parametrize("allowed_fraction", [1.0, 0.6])
 def test_random_post_decision_mdp_equals_plain(seed, allowed_fraction):
@@ -104,6 +121,7 @@ def test_random_post_decision_mdp_equals_plain(seed, allowed_fraction):
     assert np.array_equal(ps.rows_of(act), rows.pair_row[np.arange(mdp.n_states), act])
 
 
+@pytest.mark.usefixtures("kernel_path")
 @pytest.mark.parametrize("max_codes", [0, 8, 65_536])
 def test_reward_storage_variants_equal_plain(monkeypatch, max_codes):
     # 0: float rewards; 8: too few codes for the rewards, so float; 65,536: uint16 codes
@@ -121,6 +139,7 @@ def test_reward_storage_variants_equal_plain(monkeypatch, max_codes):
         assert_same_result(lb.solve_exact(mdp, method), lb.solve_exact(rows, method), rows)
 
 
+@pytest.mark.usefixtures("kernel_path")
 def test_patrol_rewards_are_coded_exactly():
     mdp = small_patrol()
     ps = post_decision_rows(mdp)
@@ -132,6 +151,7 @@ def test_patrol_rewards_are_coded_exactly():
     )
 
 
+@pytest.mark.usefixtures("kernel_path")
 def test_detection_rejects_mdps_without_the_form():
     assert post_decision_rows(lb.garnet(200, 3, 4, 0.9, seed=2, shared_probabilities=True)) is None
     assert post_decision_rows(lb.garnet(200, 3, 4, 0.9, seed=2)) is None  # per-pair probs
@@ -154,6 +174,7 @@ def test_detection_rejects_mdps_without_the_form():
     assert PostDecisionRows.detect(mdp2) is not None
 
 
+@pytest.mark.usefixtures("kernel_path")
 def test_detection_notices_a_single_inconsistent_pair():
     # two pairs with the same first successor and different tuples
     succ = np.array([[[1, 0]], [[1, 1]], [[2, 0]]])
@@ -161,6 +182,7 @@ def test_detection_notices_a_single_inconsistent_pair():
     assert PostDecisionRows.detect(mdp) is None
 
 
+@pytest.mark.usefixtures("kernel_path")
 @pytest.mark.parametrize("kw", PATROLS[:2])
 def test_fast_policy_evaluation_matches_direct_solve(kw):
     mdp = small_patrol(**kw)
@@ -188,6 +210,7 @@ def test_fast_policy_evaluation_matches_direct_solve(kw):
         lb.evaluate_policy(mdp, bad, method="iterative")
 
 
+@pytest.mark.usefixtures("kernel_path")
 def test_fast_bellman_residual_equals_plain():
     mdp = small_patrol()
     v = np.random.default_rng(1).normal(size=mdp.n_states)
@@ -198,7 +221,10 @@ def test_fast_bellman_residual_equals_plain():
     assert fast == pytest.approx(ref, abs=1e-13)
 
 
-@settings(max_examples=15, deadline=None)
+@pytest.mark.usefixtures("kernel_path")
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(
     n=st.integers(2, 60),
     a=st.integers(1, 4),
@@ -212,3 +238,217 @@ def test_property_fast_equals_plain(n, a, ll, lam, frac, seed):
     rows = exact_rows(mdp)
     for method in ("vi", "mpi"):
         assert_same_result(lb.solve_exact(mdp, method), lb.solve_exact(rows, method), rows)
+
+
+# ---------------------------------------------------------------------- numpy twins vs compiled
+def on_path(monkeypatch, path: str, func):
+    """``func()`` with every operation sent to one kernel path."""
+    monkeypatch.setattr(_backend, "SMALL_READS", NUMPY if path == "numpy" else COMPILED)
+    try:
+        return func()
+    finally:
+        monkeypatch.undo()
+
+
+def masked_mdp(
+    n: int,
+    n_actions: int,
+    n_out: int,
+    discount: float,
+    seed: int,
+    shared: bool,
+    part: lb.Partition | None = None,
+) -> lb.FiniteMDP:
+    """A random MDP with an action mask, repeated successors and zero probabilities (so
+    the merge, padding and tie rules are all exercised) and rewards with exact ties.
+    With ``part``, the states of each partition share an allowed action (the NLP's rule)."""
+    rng = np.random.default_rng(seed)
+    succ = rng.integers(0, n, size=(n, n_actions, n_out))
+    succ[:, :, -1] = succ[:, :, 0]  # a repeated target in every tuple
+    shape = (n_out,) if shared else (n, n_actions, n_out)
+    p = rng.random(shape)
+    p[..., 1 % n_out] = 0.0 if n_out > 2 else p[..., 1 % n_out]
+    p /= p.sum(axis=-1, keepdims=True)
+    allowed = rng.random((n, n_actions)) < 0.7
+    allowed[np.arange(n), rng.integers(0, n_actions, size=n)] = True
+    if part is not None:
+        allowed[np.arange(n), part.labels % n_actions] = True
+    rewards = rng.integers(-3, 4, size=(n, n_actions)).astype(float) / 2  # ties on purpose
+    return lb.FiniteMDP(succ, p, rewards, discount, allowed)
+
+
+def fresh(mdp: lb.FiniteMDP) -> lb.FiniteMDP:
+    """The same model without the caches (exact rows, post-decision form) of a previous path."""
+    return lb.FiniteMDP(mdp.successors, mdp.probabilities, mdp.rewards, mdp.discount, mdp.allowed)
+
+
+def assert_rows_identical(a: lb.BellmanRows, b: lb.BellmanRows) -> None:
+    for name in ("indptr", "owner", "action", "reward", "targets", "probs", "pair_row"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.dtype == y.dtype, name
+        assert np.array_equal(x, y), f"{name} differs between the paths"
+        if x.dtype.kind == "f":  # bit for bit, signed zeros included
+            assert np.array_equal(np.asarray(x).view(np.int64), np.asarray(y).view(np.int64)), name
+    assert np.array_equal(a.pair_tight, b.pair_tight)
+
+
+def bits(x) -> np.ndarray:
+    return np.ascontiguousarray(x, dtype=np.float64).view(np.int64)
+
+
+@pytest.mark.parametrize("shared", [True, False])
+@pytest.mark.parametrize("seed", range(3))
+def test_numpy_operators_equal_compiled_bit_for_bit(monkeypatch, seed, shared):
+    part = lb.random_partition(120, 17, seed=seed)
+    mdp = masked_mdp(120, 3, 4, 0.9, seed, shared, part)
+    v = np.random.default_rng(seed + 100).normal(size=mdp.n_states) * 10
+
+    def run():
+        rows = lb.BellmanRows.from_mdp(mdp)
+        agg_max = lb.BellmanRows.aggregate(mdp, part, reduce="max")
+        agg_min = lb.BellmanRows.aggregate(mdp, part, reduce="min")
+        w = v[: part.n_partitions]
+        q = rows.q_values(v)
+        tv, arg = rows.apply_max(v)
+        gv, garg = agg_min.apply_maxmin(w)
+        pol = rows.evaluate_rows(arg, v)
+        out = np.empty(mdp.n_states)
+        stats = rows._sweep_policy(arg, v, out, rows._chunks())
+        cert = lb.certify(agg_max, w)
+        return rows, agg_max, agg_min, q, tv, arg, gv, garg, pol, stats, cert
+
+    a = on_path(monkeypatch, "numpy", run)
+    b = on_path(monkeypatch, "compiled", run)
+    for x, y in zip(a[:3], b[:3], strict=True):
+        assert_rows_identical(x, y)
+    for name, x, y in zip(("q", "Tv", "arg", "Gv", "Garg", "T_pi v"), a[3:9], b[3:9], strict=True):
+        assert np.array_equal(bits(x), bits(y)), f"{name} differs between the paths"
+    assert a[9] == b[9]
+    ca, cb = a[10], b[10]
+    assert np.array_equal(bits(ca.lower), bits(cb.lower))
+    assert np.array_equal(bits(ca.upper), bits(cb.upper))
+    assert (ca.error_bound, ca.residual, ca.margin) == (cb.error_bound, cb.residual, cb.margin)
+    # and against the plain loop reference: first maximising row of every state
+    ref = reference_bellman(mdp, v)
+    assert np.array_equal(a[4], ref.max(axis=1))
+    assert np.array_equal(a[0].action[a[5]], ref.argmax(axis=1))
+
+
+@pytest.mark.parametrize("method", ["mpi", "vi", "pi"])
+@pytest.mark.parametrize("shared", [True, False])
+def test_numpy_solve_equals_compiled_bit_for_bit(monkeypatch, method, shared):
+    mdp = masked_mdp(150, 4, 3, 0.95, seed=11, shared=shared)
+    a = on_path(monkeypatch, "numpy", lambda: lb.solve_exact(fresh(mdp), method))
+    b = on_path(monkeypatch, "compiled", lambda: lb.solve_exact(fresh(mdp), method))
+    assert np.array_equal(bits(a.values), bits(b.values)), "values differ between the paths"
+    assert np.array_equal(a.policy, b.policy)
+    assert np.array_equal(a.policy_rows, b.policy_rows)
+    assert (a.residual, a.error_bound, a.iterations, a.sweeps) == (
+        b.residual,
+        b.error_bound,
+        b.iterations,
+        b.sweeps,
+    )
+    # the certified bound holds against an independent value iteration, allowing for the
+    # reference's own error (its residual / (1 - lambda): the bound is nearly tight here)
+    ref = reference_solve(mdp)
+    ref_err = np.abs(reference_bellman(mdp, ref).max(axis=1) - ref).max() / (1 - mdp.discount)
+    assert np.abs(a.values - ref).max() <= a.error_bound + 1.01 * ref_err + 1e-13
+
+
+def test_numpy_post_decision_form_equals_compiled(monkeypatch):
+    mdp = post_decision_mdp(500, 3, 4, 0.9, seed=5, allowed_fraction=0.6)
+
+    def run():
+        m = fresh(mdp)
+        ps = post_decision_rows(m)
+        res = lb.solve_exact(m, "mpi")
+        ev = lb.evaluate_policy(m, res.policy, method="iterative")
+        return ps, res, ev, lb.bellman_residual(m, res.values)
+
+    (pa, ra, ea, da), (pb, rb, eb, db) = (
+        on_path(monkeypatch, p, run) for p in ("numpy", "compiled")
+    )
+    assert pa is not None and pb is not None
+    assert np.array_equal(pa.first, pb.first) and np.array_equal(pa.outcomes, pb.outcomes)
+    assert np.array_equal(pa.reward_table[pa.reward_codes], pb.reward_table[pb.reward_codes])
+    assert np.array_equal(bits(ra.values), bits(rb.values))
+    assert np.array_equal(ra.policy_rows, rb.policy_rows)
+    assert (ra.residual, ra.error_bound) == (rb.residual, rb.error_bound)
+    assert np.array_equal(bits(ea.values), bits(eb.values)) and ea.residual == eb.residual
+    assert da == db
+    assert da == pytest.approx(ra.residual, rel=0, abs=1e-13)  # measured on u + c, not u
+
+
+def test_numpy_twins_of_the_helper_kernels_equal_compiled():
+    rng = np.random.default_rng(3)
+    succ = rng.integers(-2, 12, size=(9, 3, 4))
+    allow = rng.random((9, 3)) < 0.6
+    assert _npkernels.check_successors(succ, allow, 10) == tuple(
+        int(x) for x in _kernels.check_successors(succ, allow, 10)
+    )
+    owner = rng.integers(0, 50, size=200).astype(np.int32)
+    action = rng.integers(0, 4, size=200).astype(np.int32)
+    targets = rng.integers(0, 50, size=(200, 3)).astype(np.int32)
+    pbits = rng.random((200, 3)).view(np.int64)
+    h1, h2 = np.empty(200, dtype=np.uint64), np.empty(200, dtype=np.uint64)
+    _npkernels.hash_rows(owner, action, targets, pbits, h1)
+    _kernels.hash_rows(owner, action, targets, pbits, h2)
+    assert np.array_equal(h1, h2)
+    reward = rng.integers(0, 20, size=(30, 3)) * 0.1
+    for max_codes in (5, 256):
+        got = []
+        for kern in (_npkernels, _kernels):
+            codes = np.empty(reward.shape, dtype=np.uint16)
+            table = np.empty(max_codes)
+            count = kern.reward_codes(reward, reward.view(np.int64), max_codes, codes, table)
+            got.append(count)
+            if count > 0:
+                assert np.array_equal(table[codes], reward)
+        assert got[0] == got[1] == (-1 if max_codes == 5 else len(np.unique(reward)))
+
+
+@settings(
+    max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    n=st.integers(1, 40),
+    a=st.integers(1, 4),
+    ll=st.integers(1, 5),
+    m=st.integers(1, 8),
+    lam=st.sampled_from([0.0, 0.5, 0.9]),
+    shared=st.booleans(),
+    seed=st.integers(0, 10_000),
+)
+def test_property_numpy_equals_compiled(monkeypatch, n, a, ll, m, lam, shared, seed):
+    mdp = masked_mdp(n, a, ll, lam, seed, shared)
+    part = lb.random_partition(n, min(m, n), seed=seed)
+    v = np.random.default_rng(seed).normal(size=n)
+
+    def run():
+        m_ = fresh(mdp)
+        rows = lb.BellmanRows.aggregate(m_, part, reduce="max")
+        return rows, lb.solve_exact(m_), rows.apply_max(v[: part.n_partitions])
+
+    (ra, sa, ta), (rb, sb, tb) = (on_path(monkeypatch, p, run) for p in ("numpy", "compiled"))
+    assert_rows_identical(ra, rb)
+    assert np.array_equal(bits(sa.values), bits(sb.values)) and sa.residual == sb.residual
+    assert np.array_equal(bits(ta[0]), bits(tb[0])) and np.array_equal(ta[1], tb[1])
+
+
+def test_compile_is_announced_once_per_group(monkeypatch, caplog):
+    monkeypatch.setattr(_backend, "SMALL_READS", COMPILED)
+    monkeypatch.setattr(_backend, "_announced", set())
+    monkeypatch.setattr(_backend, "_needs_compile", lambda module, names: True)
+    with caplog.at_level("WARNING", logger="lpbounds"):
+        for _ in range(3):
+            lb.solve_exact(exact_rows(lb.garnet(30, 2, 3, 0.9, seed=1)))
+    notes = [r for r in caplog.records if "compiling" in r.getMessage()]
+    assert len(notes) == 2, [r.getMessage() for r in notes]  # model checks, row sweeps
+    assert all("about" in r.getMessage() and r.levelname == "WARNING" for r in notes)
+    caplog.clear()
+    monkeypatch.setattr(_backend, "SMALL_READS", NUMPY)
+    monkeypatch.setattr(_backend, "_announced", set())
+    with caplog.at_level("WARNING", logger="lpbounds"):
+        lb.solve_exact(lb.garnet(30, 2, 3, 0.9, seed=1))
+    assert not caplog.records, "a small model compiles nothing and says nothing"

@@ -8,7 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import lpbounds as lb
-from lpbounds import rows as rows_mod
 from lpbounds.errors import ValidationError
 
 from .conftest import reference_bellman
@@ -131,17 +130,31 @@ def test_maxmin_operator_matches_loops():
     np.testing.assert_allclose(q[arg], got, rtol=1e-14)
 
 
-def test_key_collisions_fall_back_to_exact_grouping(monkeypatch):
+@pytest.fixture(params=["numpy", "compiled"])
+def kernels(request, monkeypatch):
+    """Run a test on each kernel path (:mod:`lpbounds._backend`); yields the two modules
+    that path calls: (aggregation kernels, sweep kernels)."""
+    from lpbounds import _aggregate, _backend, _kernels, _npkernels
+
+    if request.param == "compiled":
+        monkeypatch.setattr(_backend, "SMALL_READS", 0)
+        return _aggregate, _kernels
+    monkeypatch.setattr(_backend, "SMALL_READS", 10**18)
+    return _npkernels, _npkernels
+
+
+def test_key_collisions_fall_back_to_exact_grouping(monkeypatch, kernels):
+    agg, sweep = kernels
     mdp = lb.garnet(40, 2, 3, 0.9, seed=6, shared_probabilities=True)
     part = lb.random_partition(40, 5, seed=6)
     honest = lb.BellmanRows.aggregate(mdp, part)
     # pretend the fast path saw a collision, then make every row's fallback hash collide too
-    monkeypatch.setattr(rows_mod._aggregate, "mark_groups", lambda *args: True)
+    monkeypatch.setattr(agg, "mark_groups", lambda *args: True)
 
     def constant_hash(owner, action, targets, probbits, out):
         out[:] = 7
 
-    monkeypatch.setattr(rows_mod._kernels, "hash_rows", constant_hash)
+    monkeypatch.setattr(sweep, "hash_rows", constant_hash)
     collided = lb.BellmanRows.aggregate(mdp, part)
     assert rows_as_dict(collided) == rows_as_dict(honest)
     np.testing.assert_array_equal(collided.indptr, honest.indptr)
@@ -157,7 +170,8 @@ def test_key_collisions_fall_back_to_exact_grouping(monkeypatch):
     np.testing.assert_array_equal(collided.pair_tight, honest.pair_tight)
 
 
-def test_mark_groups_detects_equal_keys_of_different_rows():
+def test_mark_groups_detects_equal_keys_of_different_rows(kernels):
+    agg, _ = kernels
     # rows 0-2 share a hash; rows 1 and 2 differ (a collision); row 3 is another bucket
     # with the same content and hash as row 0 (never merged across buckets)
     oa = np.array([4, 4, 4, 6])
@@ -166,9 +180,9 @@ def test_mark_groups_detects_equal_keys_of_different_rows():
     pbits = np.zeros((4, 2), dtype=np.int64)
     new = np.empty(4, dtype=bool)
     order = np.arange(4)
-    assert rows_mod._aggregate.mark_groups(order, oa, key, t, pbits, new, 2)
+    assert agg.mark_groups(order, oa, key, t, pbits, new, 2)
     np.testing.assert_array_equal(new, [True, False, True, True])
-    assert not rows_mod._aggregate.mark_groups(order[:2], oa, key, t, pbits, new, 2)
+    assert not agg.mark_groups(order[:2], oa, key, t, pbits, new, 2)
 
 
 def test_from_arrays_validation():

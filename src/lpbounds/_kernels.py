@@ -5,7 +5,9 @@ Every kernel works on a row system in CSR form (see :mod:`lpbounds.rows`): rows 
 ``q_r = reward[r] + discount * sum_l probs[r, l] * v[targets[r, l]]``. ``probs`` may be
 a read-only broadcast view (stride 0) when all rows share one distribution.
 
-These are the fast paths; :mod:`tests.test_kernels` checks each against plain numpy.
+These are the fast paths for large models; :mod:`lpbounds._npkernels` has a numpy twin of
+each, with the same arithmetic, used below :data:`lpbounds._backend.SMALL_READS` reads per
+sweep; ``tests/test_fast_paths.py`` checks that both give the same numbers.
 """
 
 from __future__ import annotations
@@ -384,3 +386,28 @@ def ps_policy_stats_coded(
         lo[c] = lc
         hi[c] = hc
     return lo.min(), hi.max()
+
+
+@njit(**_OPTS)
+def check_successors(succ, allow, n):  # pragma: no cover - compiled
+    """Out-of-range successors of an MDP: (count on allowed pairs, first flat index, count
+    elsewhere), for :class:`lpbounds.mdp.FiniteMDP`.
+
+    One pass and no temporaries (full-size boolean masks cost GBs at 33 M states).
+    """
+    n_states, n_actions, n_out = succ.shape
+    bad = 0
+    first = -1
+    bad_disallowed = 0
+    for x in range(n_states):
+        for u in range(n_actions):
+            for ll in range(n_out):
+                k = succ[x, u, ll]
+                if k < 0 or k >= n:
+                    if allow[x, u]:
+                        if first < 0:
+                            first = (x * n_actions + u) * n_out + ll
+                        bad += 1
+                    else:
+                        bad_disallowed += 1
+    return bad, first, bad_disallowed

@@ -31,6 +31,11 @@ where it exists (the patrol model) a sweep reads far less memory and the exact r
 never built. Its arithmetic is that of the rows, so the results are the same numbers;
 ``tests/test_fast_paths.py`` checks that. Pass the rows (``exact_rows(mdp)``) to force
 the plain path.
+
+Small models (fewer than :data:`lpbounds._backend.SMALL_READS` values read per sweep) run
+on numpy twins of the compiled kernels, with the same arithmetic and the same numbers, so
+a first solve in a fresh environment compiles nothing; larger ones use the compiled
+kernels and say so on the ``lpbounds`` logger when they compile first.
 """
 
 from __future__ import annotations
@@ -42,14 +47,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-import numba
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError, ValidationError
 from .mdp import FiniteMDP
-from .rows import BellmanRows, PostDecisionRows, _nchunks
+from .rows import BellmanRows, PostDecisionRows
 from .status import Status
 from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
 from .validation import (
@@ -460,7 +463,15 @@ def _sweep_reads(ops: BellmanRows | PostDecisionRows) -> int:
 
 @contextmanager
 def _threads_for(ops: BellmanRows | PostDecisionRows) -> Iterator[None]:
-    """Run the enclosed sweeps on one thread when they are small (see SERIAL_SWEEP_READS)."""
+    """Run the enclosed sweeps on one thread when they are small (see SERIAL_SWEEP_READS).
+
+    Only compiled sweeps have threads; numba is not imported for the numpy ones.
+    """
+    if not ops.compiled:
+        yield
+        return
+    import numba
+
     before = numba.get_num_threads()
     serial = before > 1 and _sweep_reads(ops) < SERIAL_SWEEP_READS
     if serial:
@@ -519,7 +530,7 @@ def _iterate(
     updates ``c``. ``u + c`` is formed once, at the end.
     """
     lam = rows.discount
-    nchunks = _nchunks()
+    nchunks = rows._chunks()
     sweeps = 0
     hist: list[float] = []
     res = np.inf
@@ -658,6 +669,8 @@ def _evaluate_rows(
     if method == "auto":
         method = "direct" if rows.n_vars <= 200_000 else "iterative"
     if method == "direct":
+        import scipy.sparse.linalg as spla  # 0.05 s to import: only where it is used
+
         p = rows.transition_matrix(sel)
         a = sp.identity(rows.n_vars, format="csc") - lam * p.tocsc()
         v = np.asarray(spla.spsolve(a, r_pi), dtype=np.float64)
@@ -690,7 +703,7 @@ def _evaluate_iterative(
     rows (BellmanRows) or actions (PostDecisionRows).
     """
     lam = ops.discount
-    nchunks = _nchunks()
+    nchunks = ops._chunks()
     u = np.zeros(ops.n_vars)
     buf = np.empty_like(u)
     kw: dict[str, Any] = {"w": ops.new_work()} if isinstance(ops, PostDecisionRows) else {}
@@ -715,8 +728,7 @@ def _evaluate_post_decision(
     act = pol.astype(np.int8)
     v, sweeps = _evaluate_iterative(ps, act, tol, 1_000_000)
     out = np.empty_like(v)
-    nchunks = _nchunks()
-    lo, hi = ps._sweep_policy(act, v, out, nchunks)  # measured on the returned vector
+    lo, hi = ps._sweep_policy(act, v, out, ps._chunks())  # measured on the returned vector
     res = max(-lo, hi)
     if res > tol:
         raise ConvergenceError(f"policy evaluation stopped with residual {res:.3e} > {tol:.3e}")
@@ -793,7 +805,7 @@ def bellman_residual(model: Model, values: Any) -> float:
     if ps is not None:
         v = check_vector("values", values, ps.n_vars)
         out = np.empty_like(v)
-        lo, hi = ps._sweep_max(v, out, ps.new_arg(), _nchunks())
+        lo, hi = ps._sweep_max(v, out, ps.new_arg(), ps._chunks())
         return max(-lo, hi)
     rows = exact_rows(model)
     v = check_vector("values", values, rows.n_vars)

@@ -18,7 +18,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -45,28 +44,18 @@ def index_dtype(n: int) -> type[np.signedinteger[Any]]:
     return np.int32 if n < 2**31 - 1 else np.int64
 
 
-@numba.njit(cache=True, nogil=True)
-def _check_successors(succ, allow, n):  # pragma: no cover - compiled
+def _check_successors(succ: np.ndarray, allow: np.ndarray, n: int) -> tuple[int, int, int]:
     """Out-of-range successors: (count on allowed pairs, first flat index, count elsewhere).
 
-    One pass and no temporaries (full-size boolean masks cost GBs at 33 M states).
+    Compiled for large models (one pass, no temporaries: full-size boolean masks cost GBs
+    at 33 M states), plain numpy for small ones (:mod:`lpbounds._backend`).
     """
-    n_states, n_actions, n_out = succ.shape
-    bad = 0
-    first = -1
-    bad_disallowed = 0
-    for x in range(n_states):
-        for u in range(n_actions):
-            for ll in range(n_out):
-                k = succ[x, u, ll]
-                if k < 0 or k >= n:
-                    if allow[x, u]:
-                        if first < 0:
-                            first = (x * n_actions + u) * n_out + ll
-                        bad += 1
-                    else:
-                        bad_disallowed += 1
-    return bad, first, bad_disallowed
+    from . import _backend
+
+    bad, first, bad_disallowed = _backend.sweep_kernels(succ.size, "mdp").check_successors(
+        succ, allow, n
+    )
+    return int(bad), int(first), int(bad_disallowed)
 
 
 def _shares(stored: np.ndarray, given: Any) -> bool:

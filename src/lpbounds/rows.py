@@ -62,7 +62,9 @@ patrol partitions satisfy the rule by construction (the allowed actions are a fu
 of the partition key, :mod:`lpbounds.patrol.bounds`). The max-rows of RLP (eq. 9) need
 no such rule: a disallowed pair simply has no row, and every row that exists is implied
 at ``Phi v`` by a Bellman inequality of an allowed pair (Theorem 1).
-The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels`.
+The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels` (compiled, for large
+systems) and :mod:`lpbounds._npkernels` (their numpy twins, same numbers, for small ones);
+:mod:`lpbounds._backend` picks one by size.
 """
 
 from __future__ import annotations
@@ -70,11 +72,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
-import numba
 import numpy as np
 import scipy.sparse as sp
 
-from . import _aggregate, _kernels
+from . import _backend
 from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
@@ -303,15 +304,16 @@ class BellmanRows:
         probs = np.empty((n_rows, n_out), dtype=np.float64)
         oa = np.empty(n_rows, dtype=np.int64)
         key = np.empty(n_rows, dtype=np.uint64)
-        nchunks = _nchunks()
-        _aggregate.canonical_rows(
+        agg = _backend.aggregate_kernels(exact.reads)
+        nchunks = _nchunks() if _backend.is_compiled(exact.reads) else 1
+        agg.canonical_rows(
             labels, exact.owner, exact.action, exact.targets, exact.probs, mdp.n_actions,
             owner, targets, probs, oa, key, nchunks,
         )  # fmt: skip
-        order, offsets = _aggregate.bucket_order(oa, m * mdp.n_actions)
-        _aggregate.sort_buckets(order, offsets, key)
+        order, offsets = agg.bucket_order(oa, m * mdp.n_actions)
+        agg.sort_buckets(order, offsets, key)
         new = np.empty(n_rows, dtype=bool)
-        if _aggregate.mark_groups(order, oa, key, targets, probs.view(np.int64), new, nchunks):
+        if agg.mark_groups(order, oa, key, targets, probs.view(np.int64), new, nchunks):
             # a 64-bit hash collision between different rows: group exactly instead
             group, _ = _group_rows(owner, exact.action, targets, probs)
             order = np.lexsort((group, exact.action, owner))
@@ -325,7 +327,7 @@ class BellmanRows:
         g_action = np.empty(n_groups, dtype=np.int32)
         g_t = np.empty((n_groups, n_out), dtype=idt)
         g_p = np.empty((n_groups, n_out))
-        _aggregate.merge_groups(
+        agg.merge_groups(
             order, starts, exact.reward, reduce == "max", owner, exact.action, targets, probs,
             group, reward_merged, g_owner, g_action, g_t, g_p,
         )  # fmt: skip
@@ -365,6 +367,25 @@ class BellmanRows:
         """Outcomes per row ``L`` (padded with probability 0)."""
         return int(self.targets.shape[1])
 
+    @property
+    def reads(self) -> int:
+        """Values a sweep reads, ``R * L``: small systems run on the numpy kernels
+        (:mod:`lpbounds._backend`)."""
+        return self.n_rows * self.n_outcomes
+
+    @property
+    def compiled(self) -> bool:
+        """True when the sweeps use the compiled kernels (see :attr:`reads`)."""
+        return _backend.is_compiled(self.reads)
+
+    def _k(self) -> Any:
+        """The kernel module of this system's size (numpy twins or compiled)."""
+        return _backend.sweep_kernels(self.reads)
+
+    def _chunks(self) -> int:
+        """Work chunks for the compiled kernels (1 for the numpy twins, which ignore it)."""
+        return _nchunks() if self.compiled else 1
+
     def __repr__(self) -> str:
         return (
             f"BellmanRows(n_vars={self.n_vars}, n_rows={self.n_rows}, "
@@ -380,21 +401,21 @@ class BellmanRows:
     def q_values(self, v: Any) -> np.ndarray:
         """``q_r(v) = reward_r + discount * sum_l probs_{r,l} v(targets_{r,l})`` per row."""
         out = np.empty(self.n_rows)
-        _kernels.q_values(self.reward, self.targets, self.probs, self.discount, self._vec(v), out)
+        self._k().q_values(self.reward, self.targets, self.probs, self.discount, self._vec(v), out)
         return out
 
     def apply_max(self, v: Any) -> tuple[np.ndarray, np.ndarray]:
         """``(Tv)(i) = max_{r of i} q_r(v)`` and the first maximising row of each owner."""
         out = np.empty(self.n_vars)
         arg = np.empty(self.n_vars, dtype=np.int64)
-        self._sweep_max(self._vec(v), out, arg, _nchunks())
+        self._sweep_max(self._vec(v), out, arg, self._chunks())
         return out, arg
 
     def apply_maxmin(self, v: Any) -> tuple[np.ndarray, np.ndarray]:
         """``(Gv)(i) = max_u min_{r in (i, u)} q_r(v)`` and the minimising row of the best ``u``."""
         out = np.empty(self.n_vars)
         arg = np.empty(self.n_vars, dtype=np.int64)
-        _kernels.bellman_maxmin(
+        self._k().bellman_maxmin(
             self.indptr,
             self.action,
             self.reward,
@@ -412,7 +433,7 @@ class BellmanRows:
     def _sweep_max(
         self, v: np.ndarray, out: np.ndarray, arg: np.ndarray, nchunks: int
     ) -> tuple[float, float]:
-        lo, hi = _kernels.bellman_max_stats(
+        lo, hi = self._k().bellman_max_stats(
             self.indptr, self.reward, self.targets, self.probs, self.discount, v, out, arg, nchunks
         )
         return float(lo), float(hi)
@@ -420,13 +441,13 @@ class BellmanRows:
     def _sweep_policy(
         self, sel: np.ndarray, v: np.ndarray, out: np.ndarray, nchunks: int
     ) -> tuple[float, float]:
-        lo, hi = _kernels.policy_sweep_stats(
+        lo, hi = self._k().policy_sweep_stats(
             sel, self.reward, self.targets, self.probs, self.discount, v, out, nchunks
         )
         return float(lo), float(hi)
 
     def _sweep_maxmin(self, v: np.ndarray, out: np.ndarray, arg: np.ndarray) -> tuple[float, float]:
-        _kernels.bellman_maxmin(
+        self._k().bellman_maxmin(
             self.indptr,
             self.action,
             self.reward,
@@ -444,7 +465,7 @@ class BellmanRows:
         """One policy-evaluation sweep: ``out[i] = q_{rows[i]}(v)``."""
         out = np.empty(self.n_vars)
         self._sweep_policy(
-            np.ascontiguousarray(rows, dtype=np.int64), self._vec(v), out, _nchunks()
+            np.ascontiguousarray(rows, dtype=np.int64), self._vec(v), out, self._chunks()
         )
         return out
 
@@ -572,8 +593,9 @@ class PostDecisionRows:
         succ, allowed = mdp.successors, mdp.allowed
         if not _sample_consistent(succ, allowed):
             return None
+        kern = _backend.sweep_kernels(succ.size, "post-decision")
         seen = np.zeros(n, dtype=np.bool_)
-        _kernels.ps_mark(succ, allowed, seen)
+        kern.ps_mark(succ, allowed, seen)
         post = np.flatnonzero(seen)
         del seen
         idt = index_dtype(max(n, post.size))
@@ -581,12 +603,12 @@ class PostDecisionRows:
         post_id[post] = np.arange(post.size, dtype=idt)
         outcomes = np.empty((post.size, n_out), dtype=succ.dtype)
         first = np.empty((n, n_act), dtype=idt)
-        _kernels.ps_fill(succ, allowed, post_id, outcomes, first)
+        kern.ps_fill(succ, allowed, post_id, outcomes, first)
         del post_id, post
-        nchunks = max(64, 8 * numba.get_num_threads())
-        if _kernels.ps_verify(succ, first, outcomes, nchunks) != 0:
+        nchunks = max(64, _nchunks()) if _backend.is_compiled(succ.size) else 1
+        if kern.ps_verify(succ, first, outcomes, nchunks) != 0:
             return None
-        codes, table = _reward_codes(mdp.rewards, cls.MAX_REWARD_CODES)
+        codes, table = _reward_codes(kern, mdp.rewards, cls.MAX_REWARD_CODES)
         return cls(
             n_vars=int(n),
             first=first,
@@ -603,6 +625,24 @@ class PostDecisionRows:
     def n_post(self) -> int:
         """Number of distinct post-decision states."""
         return int(self.outcomes.shape[0])
+
+    @property
+    def reads(self) -> int:
+        """Pairs times outcomes, the reads of the plain rows' sweep: the size that picks the
+        kernels (:mod:`lpbounds._backend`), so a model takes the same path either way."""
+        return int(self.first.size * self.outcomes.shape[1])
+
+    @property
+    def compiled(self) -> bool:
+        """True when the sweeps use the compiled kernels (see :attr:`reads`)."""
+        return _backend.is_compiled(self.reads)
+
+    def _k(self) -> Any:
+        return _backend.sweep_kernels(self.reads, "post-decision")
+
+    def _chunks(self) -> int:
+        """Work chunks for the compiled kernels (1 for the numpy twins, which ignore it)."""
+        return _nchunks() if self.compiled else 1
 
     @property
     def reward_absmax(self) -> float:
@@ -627,9 +667,10 @@ class PostDecisionRows:
         w: np.ndarray | None = None,
     ) -> tuple[float, float]:
         w = self.new_work() if w is None else w
-        _kernels.ps_expect(self.outcomes, self.probs, v, w)
+        kern = self._k()
+        kern.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
-            lo, hi = _kernels.ps_max_stats_coded(
+            lo, hi = kern.ps_max_stats_coded(
                 self.first,
                 self.reward_codes,
                 self.reward_table,
@@ -641,7 +682,7 @@ class PostDecisionRows:
                 nchunks,
             )
         else:
-            lo, hi = _kernels.ps_max_stats(
+            lo, hi = kern.ps_max_stats(
                 self.first, self.reward, w, self.discount, v, out, arg, nchunks
             )
         return float(lo), float(hi)
@@ -655,9 +696,10 @@ class PostDecisionRows:
         w: np.ndarray | None = None,
     ) -> tuple[float, float]:
         w = self.new_work() if w is None else w
-        _kernels.ps_expect(self.outcomes, self.probs, v, w)
+        kern = self._k()
+        kern.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
-            lo, hi = _kernels.ps_policy_stats_coded(
+            lo, hi = kern.ps_policy_stats_coded(
                 self.first,
                 self.reward_codes,
                 self.reward_table,
@@ -669,7 +711,7 @@ class PostDecisionRows:
                 nchunks,
             )
         else:
-            lo, hi = _kernels.ps_policy_stats(
+            lo, hi = kern.ps_policy_stats(
                 self.first, self.reward, act, w, self.discount, v, out, nchunks
             )
         return float(lo), float(hi)
@@ -680,7 +722,7 @@ class PostDecisionRows:
         row_start = np.zeros(self.n_vars, dtype=np.int64)
         np.cumsum(counts[:-1], out=row_start[1:])
         out = np.empty(self.n_vars, dtype=np.int64)
-        _kernels.ps_rows(self.allowed, row_start, np.asarray(act), out)
+        self._k().ps_rows(self.allowed, row_start, np.asarray(act), out)
         return out
 
 
@@ -702,15 +744,16 @@ def _sample_consistent(succ: np.ndarray, allowed: np.ndarray, size: int = 16_384
 
 
 def _reward_codes(
-    reward: np.ndarray, max_codes: int
+    kern: Any, reward: np.ndarray, max_codes: int
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """``(codes, table)`` with ``table[codes] == reward`` bit for bit, or ``(None, None)``."""
+    """``(codes, table)`` with ``table[codes] == reward`` bit for bit, or ``(None, None)``;
+    ``kern`` is the kernel module (:mod:`lpbounds._backend`)."""
     if max_codes < 1 or reward.size == 0:
         return None, None
     rew = np.ascontiguousarray(reward, dtype=np.float64)
     codes = np.empty(rew.shape, dtype=np.uint16 if max_codes <= 65_536 else np.uint32)
     table = np.empty(max_codes)
-    count = _kernels.reward_codes(rew, rew.view(np.int64), max_codes, codes, table)
+    count = kern.reward_codes(rew, rew.view(np.int64), max_codes, codes, table)
     if count < 0:
         return None, None
     if count <= 256:
@@ -750,8 +793,9 @@ def _check_every_partition_kept(mdp: FiniteMDP, partition: Partition, owner: np.
 
 
 def _nchunks() -> int:
-    """Work chunks of the sweep kernels: a few per thread, for load balance."""
-    return max(1, 8 * numba.get_num_threads())
+    """Work chunks of the compiled sweep kernels: a few per thread, for load balance
+    (imports numba: call it for compiled operations only)."""
+    return _backend.nchunks()
 
 
 def _group_rows(
@@ -767,7 +811,7 @@ def _group_rows(
         return np.zeros(0, dtype=np.int64), 0
     pbits = np.ascontiguousarray(probs).view(np.int64)
     h = np.empty(n_rows, dtype=np.uint64)
-    _kernels.hash_rows(owner, action, targets, pbits, h)
+    _backend.sweep_kernels(n_rows * targets.shape[1]).hash_rows(owner, action, targets, pbits, h)
     order = np.argsort(h, kind="stable")
     hs = h[order]
     same = hs[1:] == hs[:-1]

@@ -1,0 +1,122 @@
+"""Which kernels run an operation: plain numpy for small models, compiled (numba) for large.
+
+The compiled kernels (:mod:`lpbounds._kernels`, :mod:`lpbounds._aggregate`) are fast but
+cost a compile on first use in a fresh environment (about 20 s for a DP solve and an RLP
+on two cores; numba caches the machine code afterwards), and importing numba alone takes
+a few tenths of a second. Their numpy twins (:mod:`lpbounds._npkernels`) compute the same
+numbers with the same arithmetic and need neither. An operation whose sweep reads fewer
+than :data:`SMALL_READS` values uses the twins; larger ones use the compiled kernels,
+announced once per kernel group on the ``lpbounds`` logger (WARNING, so it reaches
+stderr) when numba has not cached them yet.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from types import ModuleType
+from typing import Any
+
+from . import _npkernels
+
+__all__ = ["SMALL_READS", "aggregate_kernels", "is_compiled", "nchunks", "sweep_kernels"]
+
+log = logging.getLogger(__name__)
+
+#: Operations reading fewer values than this per sweep (rows x outcomes, or the
+#: post-decision form's outcomes plus pairs) use the numpy twins. A numpy sweep costs
+#: about 10-20 ns per read, a compiled one 1-3 ns, so a DP solve of ~100 sweeps at this
+#: size takes a fraction of a second either way, less than importing numba and loading
+#: its cache (0.3-0.6 s), let alone compiling (2-8 s per kernel group, see below).
+SMALL_READS: int = 200_000
+
+#: Kernel groups: what they do, their measured first-compile seconds (empty cache, two
+#: loaded cores) and the kernels whose cache decides whether a compile is announced.
+_GROUPS: dict[str, tuple[str, float, tuple[str, ...]]] = {
+    "rows": (
+        "the Bellman-row sweeps",
+        6.0,
+        ("q_values", "bellman_max_stats", "policy_sweep_stats", "bellman_maxmin"),
+    ),
+    "post-decision": (
+        "the post-decision sweeps",
+        5.0,
+        ("ps_mark", "ps_fill", "ps_verify", "ps_expect", "ps_max_stats", "ps_policy_stats"),
+    ),
+    "aggregate": (
+        "the row aggregation",
+        8.0,
+        ("canonical_rows", "bucket_order", "sort_buckets", "mark_groups", "merge_groups"),
+    ),
+    "mdp": ("the model checks", 0.5, ("check_successors",)),
+}
+_announced: set[str] = set()
+
+
+def is_compiled(reads: int) -> bool:
+    """True when an operation of ``reads`` values per sweep uses the compiled kernels."""
+    return reads >= SMALL_READS
+
+
+def sweep_kernels(reads: int, group: str = "rows") -> ModuleType:
+    """The module of Bellman-sweep kernels for an operation of ``reads`` values per sweep:
+    :mod:`lpbounds._npkernels` or :mod:`lpbounds._kernels`."""
+    if not is_compiled(reads):
+        return _npkernels
+    from . import _kernels
+
+    _announce(group, _kernels, reads)
+    return _kernels
+
+
+def aggregate_kernels(reads: int) -> ModuleType:
+    """The aggregation kernels (:mod:`lpbounds._aggregate` or their numpy twins)."""
+    if not is_compiled(reads):
+        return _npkernels
+    from . import _aggregate
+
+    _announce("aggregate", _aggregate, reads)
+    return _aggregate
+
+
+def nchunks() -> int:
+    """Work chunks of the compiled sweep kernels: a few per numba thread, for load balance
+    (imports numba; the numpy twins ignore the number)."""
+    import numba
+
+    return max(1, 8 * numba.get_num_threads())
+
+
+def _announce(group: str, module: ModuleType, reads: int) -> None:
+    """Log once per group and process when the group's kernels will be compiled now."""
+    if group in _announced:
+        return
+    _announced.add(group)
+    what, seconds, names = _GROUPS[group]
+    if not _needs_compile(module, names):
+        return
+    log.warning(
+        "compiling %s for a model of %s reads per sweep (first use in this environment: "
+        "about %.0f s on 2 cores; numba caches them for later runs)",
+        what,
+        f"{reads:,}",
+        seconds,
+    )
+
+
+def _needs_compile(module: ModuleType, names: tuple[str, ...]) -> bool:
+    """True if one of the numba functions ``names`` of ``module`` has neither a compiled
+    version in this process nor a cache index on disk (a heuristic: an index without this
+    signature still compiles, silently)."""
+    for name in names:
+        obj = getattr(module, name)
+        cache: Any = getattr(obj, "_cache", None)
+        if cache is None or getattr(obj, "overloads", None):
+            continue
+        try:
+            index = cache._cache_file._index_path
+        except AttributeError:  # another numba version: assume it compiles
+            return True
+        if not os.path.exists(index):
+            return True
+    return False
