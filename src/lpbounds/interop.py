@@ -171,12 +171,13 @@ def model_from_pairs(
     q.sum_duplicates()
     q.eliminate_zeros()
     q.sort_indices()
-    ends = np.isin(s, term)
+    ends = np.isin(s, term) if term.size else np.zeros(s.size, dtype=bool)
     if ends.any():  # a terminal state's actions all move to the sink after their reward
         keep = np.repeat(~ends, np.diff(q.indptr)).astype(np.float64)
         q = sp.csr_matrix((q.data * keep, q.indices, q.indptr), shape=q.shape)
         q.eliminate_zeros()
-    extra = np.setdiff1d(term, s)  # a terminal state without any action gets action 0 (reward 0)
+    # a terminal state without any action gets action 0 (reward 0)
+    extra = term[~np.isin(term, s)] if term.size else term
     if extra.size:
         s, a = np.concatenate([s, extra]), np.concatenate([a, np.zeros_like(extra)])
         r = np.concatenate([r, np.zeros(extra.size)])
@@ -200,12 +201,19 @@ def _check_coverage(s: np.ndarray, term: np.ndarray, shape: tuple[int, int]) -> 
     """Every state needs an action (checked before anything of size n is allocated)."""
     n, _ = shape
     _check_size(shape)
-    have = np.union1d(s, term)
-    if have.size < n:
+    if n <= s.size + term.size:  # a mask of size n is no larger than the input
+        seen = np.zeros(n, dtype=bool)
+        seen[s] = True
+        seen[term] = True
+        n_have = int(seen.sum())
+        x = int(np.argmin(seen))
+    else:  # more states than pairs: some state has none (found without an n-sized array)
+        have = np.union1d(s, term)
         gap = np.flatnonzero(have != np.arange(have.size))
-        x = int(gap[0]) if gap.size else int(have.size)
+        n_have, x = int(have.size), int(gap[0]) if gap.size else int(have.size)
+    if n_have < n:
         raise ValidationError(
-            f"state {x} has no allowed action ({n - have.size} such states): no pair lists it"
+            f"state {x} has no allowed action ({n - n_have} such states): no pair lists it"
             "; a state where the process ends can be passed in terminal="
         )
 
@@ -214,7 +222,10 @@ def _check_raw_entries(q: Any, row_name: Callable[[int], str]) -> None:
     """Negative or non-finite stored entries, before duplicates are summed (they could hide)."""
     if not sp.issparse(q):
         return
-    coo = q.tocoo()
+    data = q.data if q.format in ("csr", "csc", "coo") else q.tocoo().data  # lil: lists
+    if np.isfinite(data).all() and not (data < -PROBABILITY_NEGATIVE_ATOL).any():
+        return
+    coo = q.tocoo()  # only to name the entry
     for bad, what in (
         (~np.isfinite(coo.data), "not finite"),
         (coo.data < -PROBABILITY_NEGATIVE_ATOL, "negative"),
@@ -257,13 +268,13 @@ def _assemble(
     counts = np.diff(q.indptr)
     to_sink = missing > 0.0
     n_out = max(int((counts + to_sink).max()), 1)
-    succ = np.repeat(np.arange(n_all, dtype=np.int64)[:, None, None], m, axis=1)
-    succ = np.repeat(succ, n_out, axis=2)
+    idt = np.int32 if n_all < 2**31 - 1 else np.int64  # lpbounds.mdp.index_dtype's rule
+    succ = np.broadcast_to(np.arange(n_all, dtype=idt)[:, None, None], (n_all, m, n_out)).copy()
     prob = np.zeros((n_all, m, n_out))
-    rows = np.repeat(np.arange(q.shape[0]), counts)
-    pos = np.arange(q.nnz) - q.indptr[rows]
-    succ[s[rows], a[rows], pos] = q.indices
-    prob[s[rows], a[rows], pos] = q.data
+    start = (s * m + a) * n_out  # flat offset of each pair's first outcome
+    flat = np.repeat(start - q.indptr[:-1], counts) + np.arange(q.nnz)
+    succ.reshape(-1)[flat] = q.indices
+    prob.reshape(-1)[flat] = q.data
     k = np.flatnonzero(to_sink)
     succ[s[k], a[k], counts[k]] = n  # the sink is the last state
     prob[s[k], a[k], counts[k]] = missing[k]
