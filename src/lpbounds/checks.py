@@ -180,6 +180,14 @@ def _nan_to_wide(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return np.where(np.isnan(lo), -np.inf, lo), np.where(np.isnan(hi), np.inf, hi)
 
 
+def _intervals(a_lo: Any, a_hi: Any, b_lo: Any, b_hi: Any) -> tuple[np.ndarray, ...]:
+    """The four interval ends as flat float arrays of one shape, NaN ends widened."""
+    a_lo, a_hi, b_lo, b_hi = _prepare(a_lo, a_hi, b_lo, b_hi)
+    a_lo, a_hi = _nan_to_wide(a_lo, a_hi)
+    b_lo, b_hi = _nan_to_wide(b_lo, b_hi)
+    return a_lo, a_hi, b_lo, b_hi
+
+
 def _make(
     verdict: Verdict, width: float, dev: float, accuracy: float, idx: int, arrs: tuple
 ) -> Comparison:
@@ -207,10 +215,8 @@ def compare_equal(a_lo: Any, a_hi: Any, b_lo: Any, b_hi: Any, accuracy: float) -
     *holds* iff not violated and the largest difference the intervals allow is within
     ``accuracy``; *inconclusive* otherwise.
     """
-    a_lo, a_hi, b_lo, b_hi = _prepare(a_lo, a_hi, b_lo, b_hi)
-    a_lo, a_hi = _nan_to_wide(a_lo, a_hi)
-    b_lo, b_hi = _nan_to_wide(b_lo, b_hi)
-    arrs = (a_lo, a_hi, b_lo, b_hi)
+    arrs = _intervals(a_lo, a_hi, b_lo, b_hi)
+    a_lo, a_hi, b_lo, b_hi = arrs
     if a_lo.size == 0:
         return Comparison(Verdict.HOLDS, 0.0, 0.0, float(accuracy), 0, (0.0, 0.0), (0.0, 0.0))
     with np.errstate(invalid="ignore", over="ignore"):
@@ -231,10 +237,8 @@ def compare_at_least(a_lo: Any, a_hi: Any, b_lo: Any, b_hi: Any, accuracy: float
     every entry has ``a_lo >= b_hi - accuracy`` (proven ``a >= b - accuracy``);
     *inconclusive* otherwise.
     """
-    a_lo, a_hi, b_lo, b_hi = _prepare(a_lo, a_hi, b_lo, b_hi)
-    a_lo, a_hi = _nan_to_wide(a_lo, a_hi)
-    b_lo, b_hi = _nan_to_wide(b_lo, b_hi)
-    arrs = (a_lo, a_hi, b_lo, b_hi)
+    arrs = _intervals(a_lo, a_hi, b_lo, b_hi)
+    a_lo, a_hi, b_lo, b_hi = arrs
     if a_lo.size == 0:
         return Comparison(Verdict.HOLDS, 0.0, 0.0, float(accuracy), 0, (0.0, 0.0), (0.0, 0.0))
     with np.errstate(invalid="ignore", over="ignore"):
