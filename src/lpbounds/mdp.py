@@ -103,7 +103,8 @@ class FiniteMDP:
         method of lpbounds solves: its values are ``-`` the costs-to-go, and an upper
         bound on them is minus a *lower* bound on the costs. :meth:`user_values`,
         :meth:`user_bounds` and :meth:`user_policy` translate results back; results
-        themselves (``DPResult``, ``LPResult``, ...) stay in the reward sense.
+        themselves (``DPResult``, ``LPResult``, ...) stay in the reward sense. The
+        negated rewards are a new array even with ``copy=False``.
     sink : bool
         True when the last state is an absorbing end state added by a converter
         (``terminal=`` of :meth:`from_matrices` and the other ``from_*`` constructors):
