@@ -15,7 +15,7 @@ import scipy.sparse as sp
 import lpbounds as lb
 from lpbounds.errors import ValidationError
 
-from ._reference import assert_policy_optimal, brute_force, exact
+from ._reference import assert_policy_optimal, brute_force, exact, porteus_bracket
 
 BETA = 0.95
 # test_ddp.py::TestDiscreteDP.setup_method: Puterman (2005), Section 3.1; action 1 is
@@ -68,6 +68,26 @@ def test_puterman_example(form):
     v, pol = exact(mdp)
     np.testing.assert_allclose(v, V_STAR, rtol=1e-12)
     np.testing.assert_array_equal(pol, SIGMA_STAR)
+
+
+@pytest.mark.parametrize(
+    "published",
+    [
+        # ddp.py docstring, value iteration from [0, 0] with epsilon=0.01 (162 iterations)
+        [-8.5665053, -19.99507673],
+        # ddp.py docstring, modified policy iteration from [0, 0] with epsilon=0.01
+        [-8.57142826, -19.99999965],
+    ],
+    ids=["value-iteration", "modified-policy-iteration"],
+)
+def test_puterman_docstring_iterates_bracket_v_star(published):
+    # iterates, not V*: V* (exact) must lie in the Porteus bracket each one certifies
+    # (computed with numpy; the unavailable pair's -inf reward never wins the max)
+    mdp = PUTERMAN_FORMS["docstring-product"]()
+    v, pol = exact(mdp)
+    lo, hi = porteus_bracket(Q_PUTERMAN.transpose(1, 0, 2), R_PUTERMAN, BETA, published)
+    assert np.all(lo - 1e-9 <= v) and np.all(v <= hi + 1e-9), (lo, v, hi)
+    np.testing.assert_array_equal(pol, SIGMA_STAR)  # the docstring's res.sigma
 
 
 def test_puterman_product_form_needs_a_layout():
