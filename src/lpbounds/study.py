@@ -56,6 +56,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from ._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES
 from .checks import lp_bracket
 from .errors import LPBoundsError, SolverNotInstalledError, ValidationError
 from .status import POINT_STATUSES, Status
@@ -82,10 +83,8 @@ __all__ = [
     "summarize",
 ]
 
-#: The default study: the teaching instance and two seeded random sizes.
-DEFAULT_INSTANCES: tuple[str, ...] = ("garnet:100:10:1", "garnet-small", "garnet:600:60:2")
-#: Formulations of the default study.
-DEFAULT_FORMULATIONS: tuple[str, ...] = ("ELP", "RLP")
+# DEFAULT_INSTANCES (the default study: the teaching instance and two seeded random sizes)
+# and DEFAULT_FORMULATIONS come from ._defaults, which the CLI's --help reads cheaply.
 
 #: Columns of a study's DataFrame, in order.
 COLUMNS: tuple[str, ...] = (

@@ -20,12 +20,9 @@ import resource
 import time
 from typing import Any
 
-import numpy as np
 from rich.table import Table
 
-from ..dp import solve_exact
 from ..errors import SolverError, ValidationError
-from ..instances import load_instance
 from ..outputs import run_metadata, write_text_atomic
 from ..tolerances import LP_COMPARE_RTOL
 from ._common import (
@@ -63,6 +60,10 @@ def _peak_mb() -> float:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..dp import solve_exact
+    from ..instances import load_instance
     from ..patrol.bounds import LBLP, UBLP, lemma3_cardinality
     from ..patrol.instance import params_from_instance
     from ..patrol.partitions import partition_components
@@ -178,6 +179,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print(out: dict[str, Any], params: Any) -> None:
+
     t = Table(title=f"LBLP / UBLP bounds of {out['instance']}", show_header=False)
     t.add_row("|S| (eq. 27)", f"{out['n_states']:,}")
     t.add_row("M (eq. 28)", f"{out['n_partitions']:,}")

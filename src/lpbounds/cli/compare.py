@@ -11,9 +11,9 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
+from .._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES
 from ..errors import ValidationError
 from ..outputs import MANIFEST, AtomicDirectory
-from ..study import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES, run_study, save_study
 from ..tolerances import LP_CERT_RTOL
 from ._common import check_output_dir, console, progress
 
@@ -145,6 +145,8 @@ COMPARE_FILES: tuple[str, ...] = (
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..study import run_study, save_study
+
     check_output_dir(args.out, "--out", replaceable=COMPARE_FILES)
     with progress() as prog:
         task = prog.add_task("comparing solvers", total=None, status="")

@@ -12,7 +12,7 @@ import argparse
 
 from rich.table import Table
 
-from ..patrol.reproduce import DEFAULT_MODEL, DEFAULT_OUT, DEFAULT_SEEDS, reproduce
+from .._defaults import DEFAULT_MODEL, DEFAULT_OUT, DEFAULT_SEEDS
 from ._common import add_model_argument, console, nonnegative_int, positive_int, progress
 
 
@@ -57,6 +57,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..patrol.reproduce import reproduce
+
     with progress(transient=False) as prog:
         rep = reproduce(
             args.model,

@@ -24,11 +24,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from rich.table import Table
 
-from ..dp import solve_exact
-from ..instances import load_instance
 from ..outputs import AtomicDirectory, run_metadata, write_text_atomic
 from ._common import (
     add_model_argument,
@@ -62,6 +59,11 @@ SOLUTION_FILES: tuple[str, ...] = ("solution.npz", "solution.json", "manifest.js
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..dp import solve_exact
+    from ..instances import load_instance
+
     inst = load_instance(args.model)
     if args.json:
         check_output_file(args.json, "--json")
@@ -120,6 +122,8 @@ def run(args: argparse.Namespace) -> int:
 
 def write_solution(out: str, mdp: Any, result: Any, stats: dict[str, Any]) -> Path:
     """Write ``--out``: the solution with its certificate (see the module docstring)."""
+    import numpy as np
+
     from ..certificate import certify
     from ..dp import exact_rows
 

@@ -11,18 +11,7 @@ from rich import box
 from rich.markup import escape
 from rich.table import Table
 
-from ..formulations import installed_lp_solvers, resolve_solver
 from ..tolerances import LP_COMPARE_RTOL
-from ..verify import (
-    default_solvers,
-    exit_status,
-    model_instances,
-    random_instances,
-    summarize,
-    verify_instance,
-    verify_remark2,
-    write_json,
-)
 from ._common import console, progress
 
 
@@ -51,8 +40,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         nargs="+",
         metavar="SOLVER",
         default=None,
-        help=f"any installed LP solvers: {', '.join(installed_lp_solvers())} "
-        f"(default: {', '.join(default_solvers())})",
+        help="LP solvers by cvxpy name, e.g. HIGHS CLARABEL SCIPY (default: those of the three "
+        "installed here; a missing solver is refused with its install command, an unknown name "
+        "with the list of installed ones)",
     )
     p.add_argument("--random", type=int, default=5, metavar="N", help="random instances (5)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random instances and costs")
@@ -71,6 +61,17 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..formulations import resolve_solver
+    from ..verify import (
+        default_solvers,
+        exit_status,
+        model_instances,
+        random_instances,
+        verify_instance,
+        verify_remark2,
+        write_json,
+    )
+
     solvers = [resolve_solver(s) for s in (args.solvers or default_solvers())]
     insts, skipped = model_instances(
         None if args.model is None else [args.model], max_states=args.max_states
@@ -176,6 +177,8 @@ def _record_cells(r: dict) -> tuple[str, ...]:  # type: ignore[type-arg]
 
 
 def _summary_table(records: list[dict]) -> Table:  # type: ignore[type-arg]
+    from ..verify import summarize
+
     summary = Table(
         title="summary: verdicts of each check and solver (worst record)",
         title_justify="left",

@@ -48,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from .._defaults import DEFAULT_MODEL, DEFAULT_OUT, DEFAULT_SEEDS
 from ..dp import evaluate_policy, exact_rows, greedy_policy, solve_exact, solve_game
 from ..errors import ConsistencyError, ValidationError
 from ..formulations.base import resolve_solver
@@ -101,9 +102,6 @@ __all__ = [
     "write_outputs",
 ]
 
-DEFAULT_MODEL = "models/patrol-paper.toml"
-DEFAULT_OUT = "out/reproduce"
-DEFAULT_SEEDS: tuple[int, ...] = (1, 2, 3, 4, 5)
 #: Paper, Table 1.
 PAPER_TABLE1 = {
     "pi_star": {"mean_loiters": 4.7, "mean_delay": 5.6, "worst_delay": 15},
