@@ -50,3 +50,35 @@ def test_console_script_runs():
     )
     assert proc.returncode == 0, proc.stderr
     assert "residual" in proc.stdout
+
+
+def test_quiet_prints_nothing_and_verbose_logs_the_environment(capsys):
+    import logging
+
+    log = logging.getLogger("lpbounds")
+    before = (log.level, log.propagate, list(log.handlers))
+    assert main(["solve", "garnet-small", "--quiet"]) == 0
+    out = capsys.readouterr()
+    assert out.out == "" and out.err == ""
+    assert main(["solve", "garnet-small", "--verbose"]) == 0
+    out = capsys.readouterr()
+    assert "exact solve of garnet-small" in out.out
+    assert f"lpbounds: DEBUG: lpbounds {lb.__version__}" in out.err
+    assert "numpy " + np.__version__ in out.err
+    # the command's logging set-up is undone: no handler, level or propagation left behind
+    assert (log.level, log.propagate, list(log.handlers)) == before
+
+
+def test_quiet_and_verbose_exclude_each_other(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["solve", "garnet-small", "--quiet", "--verbose"])
+    assert exc.value.code == 2
+    assert "not allowed with argument" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["solve", "verify", "bounds", "reproduce", "compare"])
+def test_every_subcommand_has_quiet_and_verbose(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = capsys.readouterr().out
+    assert "--quiet" in text and "--verbose" in text

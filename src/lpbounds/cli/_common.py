@@ -114,26 +114,39 @@ def add_verbosity_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def configure_output(quiet: bool = False, verbose: bool = False) -> None:
-    """Set up the ``lpbounds`` logger (stderr; WARNING by default, ERROR with ``quiet``,
-    DEBUG with ``verbose``), the consoles and the solvers' output for one command.
+@contextmanager
+def configure_output(quiet: bool = False, verbose: bool = False) -> Iterator[None]:
+    """For the duration of one command: the ``lpbounds`` logger on stderr (WARNING by
+    default, ERROR with ``quiet``, DEBUG with ``verbose``), quiet consoles with ``quiet``,
+    and the solvers' own output with ``verbose``. Everything is restored afterwards, so
+    :func:`lpbounds.cli.main.main` called in-process leaves no logging state behind.
 
     Only the ``lpbounds`` logger is configured, never the root logger.
     """
     from .._quiet import show_solver_output
 
     log = logging.getLogger("lpbounds")
-    for h in [h for h in log.handlers if getattr(h, "_lpbounds_cli", False)]:
-        log.removeHandler(h)
+    saved = (log.level, log.propagate, console.quiet, err_console.quiet)
     handler = logging.StreamHandler(sys.stderr)  # the current one (pytest's capsys)
     handler.setFormatter(logging.Formatter("lpbounds: %(levelname)s: %(message)s"))
-    handler._lpbounds_cli = True  # type: ignore[attr-defined]
     log.addHandler(handler)
     log.setLevel(logging.DEBUG if verbose else logging.ERROR if quiet else logging.WARNING)
-    log.propagate = False
-    console.quiet = quiet
-    err_console.quiet = quiet
+    log.propagate = False  # no second copy through a root handler the host may have
+    console.quiet = err_console.quiet = quiet
     show_solver_output(verbose)
+    try:
+        if verbose:
+            from ..outputs import metadata_lines, run_metadata
+
+            for line in metadata_lines(run_metadata()):
+                log.debug(line)
+        yield
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(saved[0])
+        log.propagate = saved[1]
+        console.quiet, err_console.quiet = saved[2], saved[3]
+        show_solver_output(False)
 
 
 def add_model_argument(parser: argparse.ArgumentParser, default: str | None = None) -> None:

@@ -92,8 +92,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return EXIT_USAGE
         command = f"lpbounds {args.command}"
-        configure_output(quiet=args.quiet, verbose=args.verbose)
-        return int(args.func(args) or 0)
+        with configure_output(quiet=args.quiet, verbose=args.verbose):
+            return int(args.func(args) or 0)
     except KeyboardInterrupt:
         print(f"{command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
