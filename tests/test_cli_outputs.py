@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+import lpbounds.dp
 import lpbounds.patrol.reproduce as rp
 from lpbounds.cli import bounds as cli_bounds
 from lpbounds.cli import solve as cli_solve
@@ -32,8 +33,10 @@ def _never(*args, **kwargs):
 def no_computation(monkeypatch):
     """Any computation (of reproduce, solve or bounds) fails the test."""
     monkeypatch.setattr(rp, "build_model", _never)
-    monkeypatch.setattr(cli_solve, "solve_exact", _never)
-    monkeypatch.setattr(cli_bounds, "solve_exact", _never)
+    # the commands import solve_exact at module level or inside run(): patch both places
+    monkeypatch.setattr(lpbounds.dp, "solve_exact", _never)
+    monkeypatch.setattr(cli_solve, "solve_exact", _never, raising=False)
+    monkeypatch.setattr(cli_bounds, "solve_exact", _never, raising=False)
 
 
 def _one_line_error(capsys, *fragments: str) -> str:
