@@ -82,3 +82,54 @@ def test_every_subcommand_has_quiet_and_verbose(command, capsys):
         main([command, "--help"])
     text = capsys.readouterr().out
     assert "--quiet" in text and "--verbose" in text
+
+
+TINY_TOML = """[model]
+kind = "garnet"
+n_states = 12
+n_actions = 2
+branching = 3
+discount = 0.9
+seed = 5
+
+[partition]
+kind = "random"
+n_partitions = 3
+seed = 2
+"""
+
+
+@pytest.fixture
+def console_100():
+    from lpbounds.cli._common import console
+
+    old = console.width
+    console.width = 100
+    yield
+    console.width = old
+
+
+def test_compare_table_fits_100_columns_without_cutting_numbers(tmp_path, capsys, console_100):
+    import pandas as pd
+
+    model = tmp_path / "tiny.toml"
+    model.write_text(TINY_TOML)
+    args = ["compare", str(model), "--formulations", "ELP", "RLP", "--solvers", "HIGHS:ipm"]
+    assert main([*args, "CLARABEL", "--jobs", "1", "--out", str(tmp_path / "c")]) == 0
+    out = capsys.readouterr().out
+    assert max(len(line) for line in out.splitlines()) <= 100
+    assert "…" not in out and "..." not in out
+    summary = pd.read_csv(tmp_path / "c" / "summary.csv")
+    for row in summary.itertuples():
+        assert format(row.objective, ".8g") in out  # every objective printed whole
+        assert str(row.config) in out
+
+
+def test_verify_tables_fit_100_columns(tmp_path, capsys, console_100):
+    model = tmp_path / "tiny.toml"
+    model.write_text(TINY_TOML)
+    args = ["verify", str(model), "--random", "0", "--costs", "1", "--solvers", "HIGHS"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert max(len(line) for line in out.splitlines()) <= 100
+    assert "…" not in out and "holds" in out
