@@ -206,3 +206,15 @@ def test_figure6_vsub_never_exceeds_vstar(small, captured):
     (sub,) = _lines(captured[0], "V_sub")
     assert np.asarray(vs.get_ydata()).size > 0
     assert (np.asarray(sub.get_ydata()) <= np.asarray(vs.get_ydata()) + small["tol"]).all()
+
+
+def test_figure3_says_so_when_values_increase(small, captured):
+    """A V* that rises along a chain is circled and the title no longer claims monotonicity."""
+    st = small["params"].stations
+    bumped = small["vstar"].copy()
+    idx = figs.select_ordered_states(small["comps"], st)[st[0]]
+    bumped[idx[3]] = bumped[idx[2]] + 1e-3
+    figs.plot_ordered_states(small["comps"], st, bumped, "f3.png")
+    title = captured[0].axes[0].get_title()
+    assert "non-increasing" not in title and "1 increase(s)" in title
+    assert _lines(captured[0], "increase")

@@ -118,15 +118,23 @@ def plot_ordered_states(
     fig, ax = plt.subplots(figsize=(8.0, 4.6))
     markers = "osD^v<>px*"
     taubar = np.zeros(0, dtype=np.int64)
+    # an increase beyond rounding would contradict Claim 2: marked, and the title says so
+    slack = 1e-9 * float(np.abs(vstar).max(initial=0.0))
+    n_up = 0
     for k, (s, idx) in enumerate(sel.items()):
+        y = vstar[idx]
         ax.plot(
             np.arange(idx.size),
-            vstar[idx],
+            y,
             marker=markers[k % 10],
             ms=3.5,
             lw=1.0,
             label=f"UAV at station l = {s}",
         )
+        up = np.flatnonzero(np.diff(y) > slack) + 1
+        if up.size:
+            ax.plot(up, y[up], "o", mfc="none", mec="red", ms=9, label=None if n_up else "increase")
+        n_up += up.size
         if idx.size > taubar.size:
             taubar = comps[idx, 3:].max(axis=1)
     if taubar.size:
@@ -153,8 +161,13 @@ def plot_ordered_states(
         f"({', '.join(['2'] + ['1'] * (m - 1))}) → (Γ, ..., Γ)"
     )
     ax.set_ylabel("V*")
+    claim = (
+        "V* is non-increasing along ordered states"
+        if n_up == 0
+        else f"V* along ordered states: {n_up} increase(s) (circled) contradict Claim 2"
+    )
     ax.set_title(
-        "Figure 3: V* is non-increasing along ordered states\n"
+        f"Figure 3: {claim}\n"
         "(all stations alerted, d = 0, w = +1; each state's delays ≥ the previous one's)",
         fontsize=10,
     )
