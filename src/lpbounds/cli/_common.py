@@ -11,17 +11,12 @@ import os
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    Progress,
-    SpinnerColumn,
-    TaskID,
-    TextColumn,
-    TimeElapsedColumn,
-)
+
+if TYPE_CHECKING:  # rich.progress is imported by progress(), not by --help
+    from rich.progress import Progress, TaskID
 
 from ..outputs import check_output_dir, check_output_file
 
@@ -79,6 +74,14 @@ class LazyProgress:
 def progress(transient: bool = True) -> Iterator[LazyProgress]:
     """A rich progress display on stderr, drawn from the first task on and only when stderr
     is a terminal."""
+    from rich.progress import (
+        BarColumn,
+        Progress,
+        SpinnerColumn,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
     lazy = LazyProgress(
         Progress(
             SpinnerColumn(),
