@@ -132,13 +132,13 @@ def solver_output(verbose: bool = False) -> Iterator[bool]:
 
 
 def quiet_highs() -> Any:
-    """A ``highspy.Highs`` with ``output_flag`` off and no banner on stdout (unless
-    :func:`show_solver_output`)."""
+    """A ``highspy.Highs`` with ``output_flag`` off, its banner in the log rather than on
+    stdout (unless :func:`show_solver_output`); a caller that wants HiGHS' log turns
+    ``output_flag`` back on."""
     import highspy
 
     if not _show:
         silence_highs_banner()
     h = highspy.Highs()
-    if not _show:
-        h.setOptionValue("output_flag", False)
+    h.setOptionValue("output_flag", False)
     return h

@@ -160,8 +160,9 @@ def highs_algorithms() -> tuple[str, ...]:
         import highspy
     except ImportError:  # pragma: no cover - highspy is a dependency
         return ()
-    h = highspy.Highs()
-    h.setOptionValue("output_flag", False)
+    from ._quiet import quiet_highs
+
+    h = quiet_highs()  # no banner on stdout
     return tuple(
         a
         for a in ("simplex", "ipm", "pdlp")

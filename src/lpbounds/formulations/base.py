@@ -43,6 +43,7 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
+from .._quiet import solver_output
 from ..certificate import Certificate, dual_objective_bound
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
 from ..status import Status
@@ -705,7 +706,8 @@ class Formulation:
         """Call the solver through cvxpy; map its status; keep any point it returned."""
         t0 = time.perf_counter()
         try:
-            with warnings.catch_warnings():
+            # solver_output: HiGHS' banner to the log, not stdout, unless verbose (_quiet)
+            with warnings.catch_warnings(), solver_output(verbose) as verbose:
                 # cvxpy's "Solution may be inaccurate": the certificate judges that instead
                 warnings.filterwarnings("ignore", message="Solution may be inaccurate")
                 problem.solve(solver=name, verbose=verbose, **options)

@@ -164,10 +164,9 @@ class HighsSolution:
 
 
 def _highs() -> Any:
-    import highspy
+    from .._quiet import quiet_highs
 
-    h = highspy.Highs()
-    h.setOptionValue("output_flag", False)
+    h = quiet_highs()  # output_flag off, and HiGHS' banner to the log, not stdout
     # the loop's LPs are small and solved thousands of times: presolve costs more than
     # it saves (measured on a 250-cut master: 5x on the joint term LP, 2x on the CGLP)
     h.setOptionValue("presolve", "off")
