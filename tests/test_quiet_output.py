@@ -148,3 +148,22 @@ def test_the_library_configures_no_logging():
     assert proc.returncode == 0, proc.stderr
     assert not BANNER.search(proc.stdout + proc.stderr)
     assert proc.stdout.split("\n")[-2] == f"0 {logging.NOTSET} ['NullHandler']"
+
+
+def test_a_users_own_cvxpy_solve_and_the_nlp_milp_print_no_banner():
+    """The models lpbounds builds are cvxpy problems users solve themselves; the banner
+    is taken when the formulations are imported, so those solves are quiet too."""
+    code = (
+        "import lpbounds as lb\n"
+        "from lpbounds.formulations import NLP, RLP\n"
+        "m, p = lb.garnet(12, 2, 3, 0.9, seed=1), lb.random_partition(12, 3, seed=1)\n"
+        "lp = RLP(m, p)\n"
+        "print(round(lp.problem.solve(solver='HIGHS'), 6))\n"
+        "print(NLP(m, p).solve('milp').status)\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert not BANNER.search(proc.stdout + proc.stderr), proc.stdout
+    assert len(proc.stdout.splitlines()) == 2

@@ -98,9 +98,14 @@ def captured_fds(fds: tuple[int, ...] = (1,), level: int = logging.DEBUG) -> Ite
 
 def silence_highs_banner() -> None:
     """Print HiGHS' once-per-process banner into the log instead of stdout (idempotent;
-    nothing when highspy is not installed)."""
+    nothing when highspy is not installed or after :func:`show_solver_output`).
+
+    :mod:`lpbounds.formulations.base` calls it at import (3 ms; cvxpy has imported highspy
+    already), so no HiGHS solve of a model built with lpbounds prints the banner, even a
+    user's own ``lp.problem.solve(solver="HIGHS")``.
+    """
     global _banner_done
-    if _banner_done:
+    if _banner_done or _show:
         return
     with _lock:
         if _banner_done:

@@ -43,12 +43,18 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from .._quiet import solver_output
+from .._quiet import silence_highs_banner, solver_output
 from ..certificate import Certificate, dual_objective_bound
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
 from ..status import Status
 from ..tolerances import LP_CERT_RTOL
 from ..validation import as_float_array, check_bool, check_int, check_real
+
+# HiGHS prints its banner on stdout at the first Highs() of a process, whatever the options
+# (cvxpy passes log_to_console=verbose only afterwards). Take that first construction here,
+# 3 ms (cvxpy imported highspy already), so the banner goes to the lpbounds log: no solve of
+# a model built here prints it, not even a user's own problem.solve(solver="HIGHS").
+silence_highs_banner()
 
 __all__ = [
     "Formulation",
