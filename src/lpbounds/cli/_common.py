@@ -154,7 +154,7 @@ def configure_output(quiet: bool = False, verbose: bool = False) -> Iterator[Non
 
 def add_model_argument(parser: argparse.ArgumentParser, default: str | None = None) -> None:
     """The positional MODEL argument (a TOML path or a packaged model's name)."""
-    kwargs = {"nargs": "?", "default": default} if default is not None else {}
+    kwargs: dict[str, Any] = {"nargs": "?", "default": default} if default is not None else {}
     parser.add_argument(
         "model",
         metavar="MODEL",

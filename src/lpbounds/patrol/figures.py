@@ -226,7 +226,7 @@ def plot_min_value_partitions(
                 e0 - 0.6,
                 color="green",
                 lw=2,
-                label="min V* over the partition" if k == 0 else None,
+                label="min V* over the partition" if k == 0 else "_nolegend_",
             )
             if k:
                 ax.axvline(s0 - 0.5, color="grey", ls=":", lw=0.7)
