@@ -56,7 +56,7 @@ from ..instances import load_instance
 from ..outputs import MANIFEST, AtomicDirectory, run_metadata
 from ..rows import BellmanRows
 from . import figures as figs
-from .bounds import LBLP, UBLP, lemma3_cardinality, patrol_rows
+from .bounds import LBLP, UBLP, Kind, lemma3_cardinality, patrol_rows
 from .instance import params_from_instance
 from .model import PatrolModel
 from .params import PatrolParams
@@ -459,7 +459,11 @@ def solve_bounds(params: PatrolParams, solver: str, tr: Tracker) -> Bounds:
     lp_upper: dict[str, np.ndarray | None] = {}
     solver_options = dict(SOLVER_OPTIONS.get(solver, {}))
     with tr.step("bounds", f"UBLP and LBLP ({solver}) and their fixed points", 4) as adv:
-        for key, cls, kind in (("ublp", UBLP, "upper"), ("lblp", LBLP, "lower")):
+        pairs: tuple[tuple[str, type[UBLP] | type[LBLP], Kind], ...] = (
+            ("ublp", UBLP, "upper"),
+            ("lblp", LBLP, "lower"),
+        )
+        for key, cls, kind in pairs:
             lp = cls(params)
             lp_res = lp.solve(solver=solver, **solver_options)
             adv(status=f"{cls.name}: {lp_res.status}")
@@ -507,7 +511,7 @@ def check_general(built: BuiltModel, bounds: Bounds, general: str, tr: Tracker) 
     mdp, part, labels = built.mdp, built.part, built.labels
     v_up, w_low = bounds.v_up, bounds.w_low
     with tr.step("general", "general RLP and NLP of the full MDP (Theorems 3, 4)", 3) as adv:
-        gres = general_bound_residuals(mdp, labels, part.n_partitions, v_up, w_low)
+        gres: dict[str, Any] = general_bound_residuals(mdp, labels, part.n_partitions, v_up, w_low)
         adv(status="residuals")
         # r_u(i): the reward is the same for every state of a partition (Section 4.2);
         # then the max- and min-reduced aggregated rows (RLP, NLP) are the same rows
@@ -1009,7 +1013,7 @@ def write_outputs(
     in ``folder`` (the temporary folder :func:`reproduce` moves into place)."""
     files = {"values": folder / "values.npz", "summary": folder / "summary.json"}
     with tr.step("write", "writing values.npz, summary.json, report.md"):
-        np.savez(files["values"], **arrays)
+        np.savez(files["values"], **arrays)  # type: ignore[arg-type]  # numpy's stub types **kwds as allow_pickle
         for key, value in _timing(tr, t_start).items():
             setattr(summary, key, value)
         files["report"] = write_report(summary, {**figures, **files}, folder / "report.md")
@@ -1058,7 +1062,7 @@ def _conventions(mc: dict[str, Any]) -> dict[str, Any]:
         "delay to first visit of the station": ("mean_delay_visit", "worst_delay_visit"),
         "delay to end of first loiter": ("mean_delay_plus_one", "worst_delay_plus_one"),
     }
-    rows = []
+    rows: list[dict[str, Any]] = []
     for name, (mk, wk) in conv.items():
         err = 0.0
         vals = {}
@@ -1069,5 +1073,5 @@ def _conventions(mc: dict[str, Any]) -> dict[str, Any]:
             err += abs(mean - paper["mean_delay"]) / paper["mean_delay"]
             err += abs(worst - paper["worst_delay"]) / paper["worst_delay"]
         rows.append({"convention": name, "values": vals, "relative_error_sum": err})
-    best = min(rows, key=lambda r: r["relative_error_sum"])
+    best = min(rows, key=lambda r: float(r["relative_error_sum"]))
     return {"table": rows, "closest": best["convention"]}
