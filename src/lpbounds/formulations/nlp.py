@@ -38,9 +38,9 @@ bracket ``lower_bound <= c'w* <= upper_bound`` and an iteration log:
 ``"milp"``
     Big-M: a binary ``z_t`` per term of each multi-term disjunction, ``sum_t z_t = 1``,
     ``a_t'w >= b_t - M_t (1 - z_t)`` with ``M_t = max(0, b_t - min_{lo <= w <= hi}
-    a_t'w)`` (the term's largest possible violation on the box ``lo = min rho / (1 -
-    lambda) <= w <= hi = max rho / (1 - lambda)``, which contains ``w*``). Solved with
-    cvxpy + HiGHS; the chosen strategy is then evaluated exactly. Under ``time_limit``
+    a_t'w)`` (the term's largest possible violation on a certified box ``lo <= w* <=
+    hi``, :attr:`NLP.milp`). The model is :attr:`NLP.problem` (class :class:`NLPMILP`).
+    Solved with cvxpy + HiGHS; the chosen strategy is then evaluated exactly. Under ``time_limit``
     the solver gets the time left; without an incumbent the initial strategy's value
     is returned (``TIME_LIMIT``, with its certified bracket).
 ``"fixed-point"``
@@ -301,6 +301,15 @@ class NLP:
     cost : ndarray (M,)
     box : (float, float)
         ``(min rho / (1 - lambda), max rho / (1 - lambda))``: contains ``w*``.
+    problem : cvxpy.Problem
+        Eq. 25 as a cvxpy mixed-integer problem (the big-M MILP of :attr:`milp`, an
+        :class:`NLPMILP` with variables ``w`` and ``z`` and constraint groups ``single``,
+        ``disjunction``, ``select``, ``box_lower``, ``box_upper``);
+        ``problem.solve(solver="HIGHS")`` gives ``c'w*``.
+    master : NLPMaster
+        The cutting-plane master LP as a cvxpy model (variable ``w``; groups ``single``,
+        ``cuts``, ``box_lower``, ``box_upper``), updated round by round by
+        ``solve("cutting-planes")``.
     """
 
     name = "NLP"
