@@ -87,8 +87,8 @@ def _fmt(x: object, spec: str) -> str:
     return format(x, spec)
 
 
-#: (heading, justification); numbers never wrap, text columns fold: the table fits 100
-#: columns (a 100-column terminal or a pipe) with the longest solver and status names.
+#: (heading, justification); numbers and statuses never wrap, the solver column folds: the
+#: table fits 100 columns (a 100-column terminal or a pipe) with the longest names.
 _COLUMNS: tuple[tuple[str, str], ...] = (
     ("LP", "left"),
     ("solver", "left"),
@@ -114,7 +114,8 @@ def _instance_table(instance: str, rows: Any) -> Table:
         show_edge=False,
     )
     for col, just in _COLUMNS:
-        text = col in ("solver", "status")
+        # only the solver configuration folds: a status is read whole ("inaccurate")
+        text = col == "solver"
         table.add_column(col, justify=just, no_wrap=not text, overflow="fold")  # type: ignore[arg-type]
     for row in rows.itertuples(index=False):
         table.add_row(
