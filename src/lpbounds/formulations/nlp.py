@@ -864,7 +864,8 @@ class NLPMILP:
     ----------
     nlp : NLP
     upper, lower : ndarray (M,), optional
-        Bounds on ``w*`` (each clipped to :attr:`NLP.box`).
+        Bounds on ``w*``, used as given (they must contain ``w*``; a certificate's sides
+        do, in floating point); default :attr:`NLP.box`.
 
     Attributes
     ----------
@@ -893,8 +894,8 @@ class NLPMILP:
     ) -> None:
         a, b = nlp.term_matrix
         m = nlp.rows.n_vars
-        lo = np.full(m, nlp.box[0]) if lower is None else np.maximum(lower, nlp.box[0])
-        hi = np.full(m, nlp.box[1]) if upper is None else np.minimum(upper, nlp.box[1])
+        lo = np.full(m, nlp.box[0]) if lower is None else np.asarray(lower, dtype=np.float64)
+        hi = np.full(m, nlp.box[1]) if upper is None else np.asarray(upper, dtype=np.float64)
         single = nlp.single_rows
         multi_mask = np.repeat(nlp.disj_size >= 2, nlp.disj_size)
         self.multi_rows = np.flatnonzero(multi_mask)
