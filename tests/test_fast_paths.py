@@ -443,9 +443,11 @@ def test_compile_is_announced_once_per_group(monkeypatch, caplog):
     with caplog.at_level("WARNING", logger="lpbounds"):
         for _ in range(3):
             lb.solve_exact(exact_rows(lb.garnet(30, 2, 3, 0.9, seed=1)))
-    notes = [r for r in caplog.records if "compiling" in r.getMessage()]
-    assert len(notes) == 2, [r.getMessage() for r in notes]  # model checks, row sweeps
-    assert all("about" in r.getMessage() and r.levelname == "WARNING" for r in notes)
+    notes = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    # the row sweeps, once; the model checks compile in under a second, unannounced
+    assert len(notes) == 1, notes
+    assert "compiling lpbounds' Bellman-row sweeps" in notes[0]
+    assert "about 3-6 s" in notes[0] and "cache" in notes[0]
     caplog.clear()
     monkeypatch.setattr(_backend, "SMALL_READS", NUMPY)
     monkeypatch.setattr(_backend, "_announced", set())

@@ -30,25 +30,26 @@ log = logging.getLogger(__name__)
 #: its cache (0.3-0.6 s), let alone compiling (2-8 s per kernel group, see below).
 SMALL_READS: int = 200_000
 
-#: Kernel groups: what they do, their measured first-compile seconds (empty cache, two
-#: loaded cores) and the kernels whose cache decides whether a compile is announced.
-_GROUPS: dict[str, tuple[str, float, tuple[str, ...]]] = {
+#: Kernel groups: what they do, their first-compile seconds (range measured with an empty
+#: cache on two cores, idle to loaded) and the kernels whose cache decides whether a
+#: compile is announced. Groups that compile in under a second are not announced.
+_GROUPS: dict[str, tuple[str, tuple[float, float], tuple[str, ...]]] = {
     "rows": (
-        "the Bellman-row sweeps",
-        6.0,
+        "Bellman-row sweeps",
+        (3.0, 6.0),
         ("q_values", "bellman_max_stats", "policy_sweep_stats", "bellman_maxmin"),
     ),
     "post-decision": (
-        "the post-decision sweeps",
-        5.0,
+        "post-decision sweeps",
+        (3.0, 6.0),
         ("ps_mark", "ps_fill", "ps_verify", "ps_expect", "ps_max_stats", "ps_policy_stats"),
     ),
     "aggregate": (
-        "the row aggregation",
-        8.0,
+        "row aggregation",
+        (3.0, 8.0),
         ("canonical_rows", "bucket_order", "sort_buckets", "mark_groups", "merge_groups"),
     ),
-    "mdp": ("the model checks", 0.5, ("check_successors",)),
+    "mdp": ("model checks", (0.3, 0.6), ("check_successors",)),
 }
 _announced: set[str] = set()
 
@@ -92,15 +93,18 @@ def _announce(group: str, module: ModuleType, reads: int) -> None:
     if group in _announced:
         return
     _announced.add(group)
-    what, seconds, names = _GROUPS[group]
-    if not _needs_compile(module, names):
+    what, (low, high), names = _GROUPS[group]
+    if high < 1.0 or not _needs_compile(module, names):
         return
     log.warning(
-        "compiling %s for a model of %s reads per sweep (first use in this environment: "
-        "about %.0f s on 2 cores; numba caches them for later runs)",
+        "numba is compiling lpbounds' %s for this model (%s values per sweep, above the "
+        "numpy path's %s): about %.0f-%.0f s on 2 cores, once; later runs load them from "
+        "numba's cache",
         what,
         f"{reads:,}",
-        seconds,
+        f"{SMALL_READS:,}",
+        low,
+        high,
     )
 
 
