@@ -132,7 +132,7 @@ def test_disallowed_actions():
     for method in ("fixed-point", "strategy-iteration", "milp"):
         err = np.abs(nlp.solve(method).values - ref).max()
         assert err <= tol, f"{method}: {err:.2e}"
-    r = nlp.solve("cutting-planes", max_iter=30)
+    r = nlp.solve("cutting-planes", cuts="lift-and-project", max_iter=30)
     _check_bracket_every_round(nlp, r, ref)
 
 
@@ -191,7 +191,7 @@ def test_cutting_planes_bracket_valid_every_round_and_closes(spec):
     mdp, part = instance(*spec)
     nlp = NLP(mdp, part)
     ref = reference_w(mdp, part)
-    r = nlp.solve("cutting-planes", max_iter=60)
+    r = nlp.solve("cutting-planes", cuts="lift-and-project", max_iter=60)
     _check_bracket_every_round(nlp, r, ref)
     assert r.converged, f"expected convergence on this instance: {r.summary()}"
     assert r.gap <= r.gap_rtol * max(1.0, abs(r.upper_bound)), r.summary()
@@ -204,7 +204,7 @@ def test_cutting_planes_bracket_valid_on_harder_instances(spec):
     """25 rounds of 10 cuts on instances that need ~80-130 rounds: every cut stays valid."""
     mdp, part = instance(*spec)
     nlp = NLP(mdp, part)
-    r = nlp.solve("cutting-planes", max_iter=25)
+    r = nlp.solve("cutting-planes", cuts="lift-and-project", max_iter=25)
     assert r.cuts > 25, f"expected many cuts; got {r.cuts}"
     _check_bracket_every_round(nlp, r, reference_w(mdp, part))
     # the lower bound never decreases (cuts only shrink the master)
@@ -217,7 +217,7 @@ def test_cutting_planes_stop_at_round_limit_is_reported():
     mdp, part = instance(15, 2, 2, 4, 0)
     nlp = NLP(mdp, part)
     ref = reference_w(mdp, part)
-    r = nlp.solve("cutting-planes", max_iter=3, cuts_per_round=1)
+    r = nlp.solve("cutting-planes", cuts="lift-and-project", max_iter=3, cuts_per_round=1)
     assert r.stop_reason == "max_rounds" and r.iterations == 3, r.summary()
     assert r.status is Status.ITERATION_LIMIT and not r.converged, r.summary()
     lo, hi = r.extra["method_bracket"]
@@ -225,7 +225,13 @@ def test_cutting_planes_stop_at_round_limit_is_reported():
     _check_bracket_every_round(nlp, r, ref)
     _check_certified(nlp, r, ref)
     with pytest.raises(ConvergenceError, match="NOT converged"):
-        nlp.solve("cutting-planes", max_iter=3, cuts_per_round=1, raise_on_failure=True)
+        nlp.solve(
+            "cutting-planes",
+            cuts="lift-and-project",
+            max_iter=3,
+            cuts_per_round=1,
+            raise_on_failure=True,
+        )
 
 
 def _check_certified(nlp, r, ref):
@@ -303,7 +309,7 @@ def test_persistent_master_matches_cold_solves():
     """The persistent HiGHS master's value = a cold cvxpy solve of the same master (2 solvers)."""
     mdp, part = instance(15, 2, 2, 4, 0)
     nlp = NLP(mdp, part)
-    r = nlp.solve("cutting-planes", max_iter=8)
+    r = nlp.solve("cutting-planes", cuts="lift-and-project", max_iter=8)
     k = r.extra["cuts_in_last_master"]
     a, b = nlp.term_matrix
     single = nlp.single_rows
@@ -336,7 +342,7 @@ def test_cvxpy_backend_gives_valid_bracket():
     mdp, part = instance(8, 2, 2, 3, 0)
     nlp = NLP(mdp, part)
     ref = reference_w(mdp, part)
-    r = nlp.solve("cutting-planes", backend="cvxpy", max_iter=4)
+    r = nlp.solve("cutting-planes", cuts="lift-and-project", backend="cvxpy", max_iter=4)
     _check_bracket_every_round(nlp, r, ref)
     assert r.solver.endswith("(cvxpy)")
 
@@ -364,11 +370,17 @@ def test_bad_input_errors():
     with pytest.raises(ValidationError, match="unknown NLP method 'simplex'"):
         nlp.solve("simplex")
     with pytest.raises(ValidationError, match="backend='highspy' solves with HiGHS"):
-        nlp.solve("cutting-planes", solver="CLARABEL")
+        nlp.solve("cutting-planes", cuts="lift-and-project", solver="CLARABEL")
     with pytest.raises(ValidationError, match="backend must be"):
+        nlp.solve("cutting-planes", cuts="lift-and-project", backend="gurobi")
+    with pytest.raises(ValidationError, match=r"backend must be one of .*'rows'.*'gurobi'"):
         nlp.solve("cutting-planes", backend="gurobi")
+    with pytest.raises(ValidationError, match=r"cuts must be one of .*'balas'"):
+        nlp.solve("cutting-planes", cuts="balas")
+    with pytest.raises(ValidationError, match="resolve must be True or False; got 'yes'"):
+        nlp.solve("cutting-planes", resolve="yes")
     with pytest.raises(ValidationError, match="cuts_per_round must be >= 1"):
-        nlp.solve("cutting-planes", cuts_per_round=0)
+        nlp.solve("cutting-planes", cuts="lift-and-project", cuts_per_round=0)
     with pytest.raises(ValidationError, match="max_iter must be an integer >= 1"):
         nlp.solve("strategy-iteration", max_iter=0)
     with pytest.raises(SolverNotInstalledError, match="unknown solver"):

@@ -118,7 +118,7 @@ def test_master_is_updated_round_by_round(backend):
     opt = float(nlp.cost @ ref)
     tol = 1e-7 * nlp.scale * float(nlp.cost.sum())
     assert first.solve("HIGHS").objective <= opt + tol  # a relaxation: a lower bound
-    res = nlp.solve("cutting-planes", backend=backend, max_iter=15)
+    res = nlp.solve("cutting-planes", cuts="lift-and-project", backend=backend, max_iter=15)
     last = nlp.master
     assert last is not first and last.n_cuts == res.cuts
     if res.cuts:

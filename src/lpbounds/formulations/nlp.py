@@ -24,11 +24,18 @@ Four methods (``NLP.solve(method=...)``), each returning :class:`NLPResult` with
 bracket ``lower_bound <= c'w* <= upper_bound`` and an iteration log:
 
 ``"cutting-planes"``
-    Balas' disjunctive (lift-and-project) cuts on a master LP relaxation; every master
-    optimum is a lower bound (weak duality: the log's lower side), strategies read off
-    the master points give the upper bound and the returned point (the incumbent).
-    See :mod:`lpbounds.formulations.nlp_cuts` for the CGLP, its
-    normalisation and how each cut is made valid.
+    ``cuts="monotone"`` (default): a certified lower point ``l <= w*`` is lifted round by
+    round by the least element of a master made of the single-term rows, monotone cuts
+    ``w(i) >= min_k f_k(l) + amin'(w - l)`` and the disjunctions *resolved* on the box
+    ``[l, h]`` (``h >= w*``: the certified value of the minimiser's strategy at ``l``);
+    the master is a Bellman row system, solved exactly by policy iteration (or, with
+    ``backend="highspy"``/``"cvxpy"``, as an LP). Closes the bracket in a few dozen
+    rounds whatever ``M``; see :mod:`lpbounds.formulations.nlp_monotone` for the proofs.
+    ``cuts="lift-and-project"``: Balas' disjunctive cuts on a master LP relaxation; every
+    master optimum is a lower bound (weak duality: the log's lower side), strategies
+    read off the master points give the upper bound and the returned point (the
+    incumbent). See :mod:`lpbounds.formulations.nlp_cuts` for the CGLP, its
+    normalisation and how each cut is made valid (closes only small instances).
 ``"strategy-iteration"``
     Fix one term per disjunction (the minimiser's strategy ``sigma``), solve that row
     system exactly (its least element ``v_sigma``, Fact 1), switch each disjunction to
@@ -97,6 +104,8 @@ __all__ = ["METHOD_KEYWORDS", "NLP", "NLPMILP", "NLPIteration", "NLPResult"]
 
 Method = Literal["cutting-planes", "strategy-iteration", "milp", "fixed-point"]
 METHODS: tuple[str, ...] = ("cutting-planes", "strategy-iteration", "milp", "fixed-point")
+#: The cut families of ``solve("cutting-planes", cuts=...)``.
+CUT_FAMILIES: tuple[str, ...] = ("monotone", "lift-and-project")
 
 #: Exact solves (fixed points of strategies and of G) stop at this relative residual.
 _EXACT_RTOL = 1e-13
@@ -233,10 +242,12 @@ class NLPResult:
 #: ``raise_on_failure``, which every method takes) and their defaults.
 METHOD_KEYWORDS: dict[str, dict[str, Any]] = {
     "cutting-planes": {
+        "cuts": "monotone",
+        "resolve": True,
         "solver": "HIGHS",
         "max_iter": 200,
         "cuts_per_round": 10,
-        "backend": "highspy",
+        "backend": None,
         "time_limit": None,
         "cglp_rows": "binding",
         "normalization": "multipliers",
@@ -348,6 +359,8 @@ class NLP:
         self._term_matrix: tuple[sp.csr_matrix, np.ndarray] | None = None
         self._milp_model: NLPMILP | None = None
         self._master: NLPMaster | None = None
+        # the last monotone master (LPData, n_single, n_resolved), built into cvxpy on demand
+        self._master_pending: tuple[Any, int, int] | None = None
 
     # ------------------------------------------------------------------ cvxpy models
     @property
@@ -380,10 +393,18 @@ class NLP:
         """The cutting-plane master LP as a cvxpy model (:class:`.nlp_cuts.NLPMaster`).
 
         Before a cutting-plane solve: the first master (the single-term rows and the box
-        ``box``). ``solve("cutting-planes")`` starts a fresh one and adds each round's
-        cuts to it (group ``"cuts"``), so afterwards it is the last master of that run;
-        its optimum is a lower bound on ``c'w*``.
+        ``box``). ``solve("cutting-planes", cuts="lift-and-project")`` starts a fresh one
+        and adds each round's cuts to it (group ``"cuts"``), so afterwards it is the last
+        master of that run; its optimum is a lower bound on ``c'w*``. After
+        ``cuts="monotone"`` it is the last round's master
+        (:class:`.nlp_monotone.MonotoneMaster`: groups ``single``, ``resolved``, ``cuts``,
+        ``box_lower`` = that round's ``l``, ``box_upper``), built on first access; its
+        optimum is ``c'`` of that round's row-system least element.
         """
+        if self._master is None and self._master_pending is not None:
+            from .nlp_monotone import MonotoneMaster
+
+            self._master = MonotoneMaster(*self._master_pending)
         if self._master is None:
             from .nlp_cuts import NLPMaster, master_data
 
@@ -524,12 +545,22 @@ class NLP:
             bracket). The MILP passes the time left to the solver (HIGHS or SCIPY; other
             MILP solvers are refused) and, if the solver returns no incumbent, keeps the
             value of the initial strategy.
+        cuts : {"monotone", "lift-and-project"}
+            ``"cutting-planes"``: the cut family (default ``"monotone"``; see the module
+            docstring). ``cuts_per_round``, ``cglp_rows`` and ``normalization`` apply to
+            ``"lift-and-project"`` only.
+        resolve : bool
+            ``"cutting-planes"`` with ``cuts="monotone"``: resolve disjunctions on the box
+            ``[l, h]`` (default ``True``; ``False`` leaves monotone cuts alone, which
+            converge at the rate ``lambda`` only).
         cuts_per_round : int
             ``"cutting-planes"``: at most this many cuts a round (the most violated
             disjunctions first).
-        backend : {"highspy", "cvxpy"}
-            ``"cutting-planes"``: a persistent HiGHS master (fast), or every LP cold
-            through cvxpy with ``solver``.
+        backend : {None, "rows", "highspy", "cvxpy"}
+            ``"cutting-planes"``. Monotone cuts: the master's row system by policy
+            iteration (``"rows"``, the default for ``None``), or its LP cold with highspy
+            or through cvxpy with ``solver``. Lift-and-project: a persistent HiGHS master
+            (``"highspy"``, the default for ``None``), or every LP cold through cvxpy.
         cglp_rows : {"binding", "all"}
             ``"cutting-planes"``: the master rows the cut-generating LP is built on: the
             single-term rows and the cuts binding at the master's point (default), or all
@@ -760,7 +791,13 @@ class NLP:
     ) -> _Outcome:
         from .nlp_cuts import cutting_planes
 
-        backend = opts["backend"]
+        if opts["cuts"] not in CUT_FAMILIES:
+            raise ValidationError(f"cuts must be one of {CUT_FAMILIES}; got {opts['cuts']!r}")
+        if not isinstance(opts["resolve"], bool):
+            raise ValidationError(f"resolve must be True or False; got {opts['resolve']!r}")
+        if opts["cuts"] == "monotone":
+            return self._monotone(opts, gap_rtol, tick)
+        backend = "highspy" if opts["backend"] is None else opts["backend"]
         out = cutting_planes(
             self,
             solver=opts["solver"],
@@ -793,6 +830,48 @@ class NLP:
                 "master_point": out.master_point,
                 "master_objective": out.master_objective,
                 "cuts_in_last_master": out.cuts_in_last_master,
+                "box": self.box,
+            },
+        )
+
+    def _monotone(
+        self, opts: dict[str, Any], gap_rtol: float, tick: Callable[..., None]
+    ) -> _Outcome:
+        from .nlp_monotone import monotone_cuts
+
+        backend = "rows" if opts["backend"] is None else opts["backend"]
+        out = monotone_cuts(
+            self,
+            gap_rtol=gap_rtol,
+            max_rounds=opts["max_iter"],
+            time_limit=opts["time_limit"],
+            resolve=opts["resolve"],
+            backend=backend,
+            solver=opts["solver"],
+            on_round=tick,
+            **(opts["solver_options"] or {}),
+        )
+        self._master, self._master_pending = None, out.master
+        limits = {"max_rounds": Status.ITERATION_LIMIT, "time_limit": Status.TIME_LIMIT}
+        solver = {
+            "rows": "none (row-system master, policy iteration)",
+            "highspy": "HIGHS (highspy)",
+        }.get(backend, f"{opts['solver']} (cvxpy)")
+        return _Outcome(
+            out.best_point,
+            stop_reason=out.stop_reason,
+            limit=limits.get(out.stop_reason),
+            iterations=out.rounds,
+            cuts=out.cuts,
+            log=out.log,
+            keep_log_bracket=True,
+            solver=solver,
+            extra={
+                "method_bracket": (out.lower, out.upper),
+                "cut_family": "monotone",
+                "loop_lower_values": out.lower_values,
+                "loop_upper_values": out.upper_values,
+                "resolved": out.resolved,
                 "box": self.box,
             },
         )

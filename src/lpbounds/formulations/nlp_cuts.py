@@ -674,7 +674,7 @@ def cutting_planes(
     n_single = single.size
     # the master as a cvxpy model (nlp.master), updated with every round's cuts
     master = NLPMaster(master_data(c, a_all[single], b_all[single], lo, hi), n_single)
-    nlp._master = master
+    nlp._master, nlp._master_pending = master, None
     be.start_master(master)
     scale = nlp.scale
     # the gap is measured in the problem's units, sum(c) max|R| / (1 - lambda): an absolute
