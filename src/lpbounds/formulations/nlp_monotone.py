@@ -272,7 +272,7 @@ def _solve_master(
     m = lo.size
     if backend == "rows":
         res = solve_exact(
-            rows, method="pi", tol=tol, evaluation="direct", initial=np.r_[lo, 0.0],
+            rows, method="mpi", tol=tol, initial=np.r_[lo, 0.0], max_iter=10_000,
             raise_on_failure=False,
         )  # fmt: skip
         return np.asarray(res.values[:m])
@@ -286,6 +286,23 @@ def _solve_master(
     if sol.status != "optimal":
         raise SolverError(f"NLP monotone master (highspy): status {sol.status}")
     return sol.x[:m]
+
+
+def _strategy_value(
+    nlp: NLP, sel: np.ndarray, initial: np.ndarray | None, tol: float
+) -> np.ndarray:
+    """The value of the minimiser's strategy ``sel`` (an MDP over ``u``), warm-started.
+
+    Modified policy iteration from the previous round's value: the strategy changes little
+    from round to round, so a few sweeps replace the sparse LU of exact policy iteration
+    (measured at M = 2,000: 0.45 s a round for the LU). Any point will do: the upper side
+    ``h`` is the certificate's, whatever the residual.
+    """
+    res = solve_exact(
+        nlp.strategy_rows(sel), method="mpi", tol=tol, initial=initial, max_iter=10_000,
+        raise_on_failure=False,
+    )  # fmt: skip
+    return np.asarray(res.values)
 
 
 def monotone_cuts(
@@ -338,12 +355,14 @@ def monotone_cuts(
     hi = np.full(m, np.inf)
     best, best_ub = np.full(m, nlp.box[1]), np.inf
     res_row = np.full(nlp.n_disjunctions, -1, dtype=np.int64)
+    v_prev = None
     log: list[NLPIteration] = []
     stop, n_cut, last = "max_rounds", 0, None
     for rnd in range(1, max_rounds + 1):
         q = nlp.rows.q_values(lo)
         fmin, kstar = _smallest(q, t.starts, t.d_of)
-        v, _ = nlp.strategy_value(kstar)
+        v = _strategy_value(nlp, kstar, v_prev, tol)
+        v_prev = v
         cert = nlp.certify(v)
         hi = np.minimum(hi, cert.upper)
         ub = float(c @ cert.upper)
