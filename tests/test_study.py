@@ -221,7 +221,8 @@ def test_cli_never_prints_ok_for_a_non_optimal_row(capsys, tmp_path):
     argv = ["compare", "garnet:40:5:1", "--formulations", "RLP", "--solvers", "SCS"]
     assert main([*argv, "--accuracy", "1e-14", "--jobs", "1", "--out", str(tmp_path)]) == 0
     text = capsys.readouterr().out
-    row = next(line for line in text.splitlines() if "SCS" in line)
+    row = next((line for line in text.splitlines() if "SCS" in line), None)
+    assert row is not None, text
     assert "inaccurate" in row and "yes" not in row and "no" in row, row
 
 

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
-from rich.console import Console
+from rich.console import Console, ConsoleDimensions
 
 if TYPE_CHECKING:  # rich.progress is imported by progress(), not by --help
     from rich.progress import Progress, TaskID
@@ -32,15 +32,51 @@ __all__ = [
     "nonnegative_int",
     "positive_float",
     "positive_int",
+    "print_table",
     "progress",
 ]
 
-#: Results on stdout. Tables are laid out for 100 columns: a terminal's own width, or 100
-#: when the output goes to a file or a pipe (rich would assume 80) unless COLUMNS says.
-console = Console()
-if not console.is_terminal and "COLUMNS" not in os.environ:
-    console.width = 100
+
+class _Console(Console):
+    """A console that lays results out for 100 columns when its output is not a terminal
+    (rich would assume 80) and COLUMNS does not say otherwise, decided at each print (the
+    stream can change after import: a pipe, a file, pytest's capture), never at import."""
+
+    @property
+    def size(self) -> ConsoleDimensions:
+        size = super().size
+        if self._width is None and not self.is_terminal and "COLUMNS" not in os.environ:
+            return ConsoleDimensions(100, size.height)
+        return size
+
+    @size.setter
+    def size(self, new_size: tuple[int, int]) -> None:
+        self._width, self._height = new_size
+
+    def print_wide(self, renderable: Any, min_width: int) -> None:
+        """Print laid out at least ``min_width`` columns wide (rich never exceeds the
+        console's width on its own)."""
+        saved = self._width
+        self._width = max(self.width, min_width)
+        try:
+            self.print(renderable)
+        finally:
+            self._width = saved
+
+
+#: Results on stdout: a terminal's own width, or 100 columns for a file or a pipe.
+console = _Console()
 err_console = Console(stderr=True)
+
+#: Result tables are laid out at least this wide: on a narrower console (COLUMNS=80, which
+#: GNU readline exports when a process initialises it) the terminal wraps the long lines
+#: rather than rich cutting numbers and names out of the cells.
+TABLE_MIN_WIDTH = 100
+
+
+def print_table(table: Any) -> None:
+    """Print a result table on :data:`console`, at least :data:`TABLE_MIN_WIDTH` wide."""
+    console.print_wide(table, TABLE_MIN_WIDTH)
 
 
 class LazyProgress:

@@ -15,7 +15,7 @@ from .._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES
 from ..errors import ValidationError
 from ..outputs import MANIFEST, AtomicDirectory
 from ..tolerances import LP_CERT_RTOL
-from ._common import check_output_dir, console, progress
+from ._common import check_output_dir, console, print_table, progress
 
 log = logging.getLogger("lpbounds")
 
@@ -172,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         Text(f"lpbounds compare: {len(result.frame)} solves in {result.seconds:.1f} s", "bold")
     )
     for instance, rows in summary.groupby("instance", sort=False):
-        console.print(_instance_table(str(instance), rows))
+        print_table(_instance_table(str(instance), rows))
     console.print(
         "cert.err = certified bound on max |LP values - exact optimum| from the returned "
         f"point alone; ok = status optimal and cert.err <= {args.accuracy:g} * "

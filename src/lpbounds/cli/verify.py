@@ -12,7 +12,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..tolerances import LP_COMPARE_RTOL
-from ._common import console, progress
+from ._common import console, print_table, progress
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -95,8 +95,8 @@ def run(args: argparse.Namespace) -> int:
         records += verify_remark2(solvers, seed=args.seed, rtol=args.rtol)
         prog.advance(task)
     for table in _records_tables(records):
-        console.print(table)
-    console.print(_summary_table(records))
+        print_table(table)
+    print_table(_summary_table(records))
     if skipped:
         console.print(
             f"skipped (more than {args.max_states} states or size unknown; name one to "
