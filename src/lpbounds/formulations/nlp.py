@@ -175,7 +175,8 @@ class NLPResult:
         Rounds (cutting planes), strategies evaluated (strategy iteration), value
         iterations (fixed point), 1 (MILP).
     cuts : int
-        Cuts added (cutting planes only).
+        Cutting planes only: cuts added (lift-and-project), or the monotone cuts in the
+        last master (monotone; ``extra["resolved"]`` counts the resolved disjunctions).
     seconds : float
     log : list of NLPIteration
         The method's own bracket per iteration (the cutting planes' master bound is not

@@ -98,6 +98,11 @@ class MonotoneMaster(NLPMaster):
         self.n_resolved = int(n_resolved)
         super().__init__(data, n_single)
 
+    @property
+    def n_cuts(self) -> int:
+        """Monotone cuts in this master (group ``"cuts"``)."""
+        return int(self.data.A.shape[0] - self.n_single - self.n_resolved)
+
     def _groups(self, n_rows: int, m: int) -> list[tuple[str, int]]:
         n_res = getattr(self, "n_resolved", 0)
         return [
