@@ -206,3 +206,38 @@ def test_round_limit_is_reported():
     assert r.iterations == 2 and r.stop_reason == "max_rounds"
     lo, hi = r.extra["method_bracket"]
     assert hi - lo > 1.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_cuts_match_a_dense_hand_computation(seed):
+    """The first round's cuts, recomputed by plain loops: amin = min_k lambda P_k entrywise,
+    right-hand side min_k f_k(l) - amin'l (small garnets, whose terms share successors)."""
+    mdp, part = garnet(12, 2, 3, 0.9, seed=seed), random_partition(12, 2, seed=seed)
+    nlp = NLP(mdp, part)
+    record: list = []
+    monotone_cuts(nlp, gap_rtol=1e-9, max_rounds=1, resolve=False, record=record)
+    rnd, rows, m, lam = record[0], nlp.rows, nlp.rows.n_vars, nlp.rows.discount
+    l = rnd.lower
+    alphas, rhos = [], []
+    for d in range(nlp.n_disjunctions):
+        terms = range(nlp.disj_start[d], nlp.disj_start[d + 1])
+        if len(terms) < 2:
+            continue
+        dense = np.zeros((len(terms), m))
+        for k, t in enumerate(terms):
+            for j, p in zip(rows.targets[t], np.asarray(rows.probs)[t], strict=True):
+                dense[k, j] += lam * p
+        f = [rows.reward[t] + dense[k] @ l for k, t in enumerate(terms)]
+        amin = dense.min(axis=0)
+        alpha = -amin
+        alpha[nlp.disj_owner[d]] += 1.0
+        alphas.append(alpha)
+        rhos.append(min(f) - amin @ l)
+    n0 = rnd.n_single + rnd.n_resolved
+    got_a = rnd.lp.A[n0:].toarray()
+    got_b = rnd.lp.row_lo[n0:]
+    assert got_a.shape == (len(alphas), m)
+    np.testing.assert_allclose(got_a, np.array(alphas), atol=1e-14)
+    np.testing.assert_allclose(got_b, np.array(rhos), atol=1e-11 * nlp.scale)
+    assert (got_b <= np.array(rhos) + 1e-15 * nlp.scale).all(), "the margin must lower rho"
+    assert np.array(alphas)[:, :].min() < 0, "expected shared successors (amin > 0 somewhere)"
