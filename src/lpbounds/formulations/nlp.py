@@ -28,7 +28,7 @@ bracket ``lower_bound <= c'w* <= upper_bound`` and an iteration log:
     round by the least element of a master made of the single-term rows, monotone cuts
     ``w(i) >= min_k f_k(l) + amin'(w - l)`` and the disjunctions *resolved* on the box
     ``[l, h]`` (``h >= w*``: the certified value of the minimiser's strategy at ``l``);
-    the master is a Bellman row system, solved exactly by policy iteration (or, with
+    the master is a Bellman row system, solved by modified policy iteration (or, with
     ``backend="highspy"``/``"cvxpy"``, as an LP). Closes the bracket in a few dozen
     rounds whatever ``M``; see :mod:`lpbounds.formulations.nlp_monotone` for the proofs.
     ``cuts="lift-and-project"``: Balas' disjunctive cuts on a master LP relaxation; every
@@ -855,7 +855,7 @@ class NLP:
         self._master, self._master_pending = None, out.master
         limits = {"max_rounds": Status.ITERATION_LIMIT, "time_limit": Status.TIME_LIMIT}
         solver = {
-            "rows": "none (row-system master, policy iteration)",
+            "rows": "none (row-system master, modified policy iteration)",
             "highspy": "HIGHS (highspy)",
         }.get(backend, f"{opts['solver']} (cvxpy)")
         return _Outcome(

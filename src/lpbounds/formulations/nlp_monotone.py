@@ -29,19 +29,21 @@ Each has nonnegative coefficients summing to at most ``lambda`` (a cut's ``amin`
 to ``lambda sum_j min_k P_k(j) <= lambda``), so with a *sink* variable ``s`` (row ``s >=
 0 + lambda s``, least value 0) that takes the missing mass, every row is an ordinary
 Bellman row ``w(i) >= r + lambda sum_j p_j w(j)`` with ``sum_j p_j = 1``. Its least
-element ``l'`` (Fact 1) is found exactly by policy iteration
-(:func:`lpbounds.dp.solve_exact`) or, as a check, by the master LP ``min c'w`` over the
-same rows and ``l <= w <= hi`` (any LP solver; the point is the least element for
-``c > 0``). ``w*`` satisfies every master row, so ``l <= l' <= w*``; the next ``l`` is
-the lower side of :func:`lpbounds.certificate.certify` (operator ``"max"``) of the
-master rows at the computed point, so the rounding of the solve cannot push ``l`` above
-``w*``. Floating point: ``amin`` is shrunk by ``4 eps`` relative (so it stays ``<= a_k``
-whatever the rounding of duplicate sums) and the cut's right-hand side and the
-resolution test carry a margin of a few ``eps`` times the magnitudes involved.
+element ``l'`` (Fact 1) is found by modified policy iteration warm-started at ``l`` to a
+residual of ``1e-13 max|R| / (1 - lambda)`` (:func:`lpbounds.dp.solve_exact`) or, as a
+check, by the master LP ``min c'w`` over the same rows and ``l <= w <= hi`` (any LP
+solver; the point is the least element for ``c > 0``). ``w*`` satisfies every master
+row, so ``l <= l' <= w*``; the next ``l`` is the lower side of
+:func:`lpbounds.certificate.certify` (operator ``"max"``) of the master rows at the
+computed point, so the rounding of the solve cannot push ``l`` above ``w*``. Floating
+point: ``amin`` is shrunk by ``4 eps`` relative (so it stays ``<= a_k`` whatever the
+rounding of duplicate sums) and the cut's right-hand side and the resolution test carry
+a margin of a few ``eps`` times the magnitudes involved.
 
 **The upper side** ``h``: the minimiser's strategy at ``l`` (per disjunction its
-smallest term) is evaluated exactly; the NLP's certificate (operator ``"maxmin"``) at that
-value gives a certified ``h >= w*``; ``h`` is the elementwise minimum over the rounds.
+smallest term) is evaluated (modified policy iteration from the last round's value);
+the NLP's certificate (operator ``"maxmin"``) at that value gives a certified ``h >= w*``;
+``h`` is the elementwise minimum over the rounds.
 
 **Why it is finite in practice.** Monotone cuts alone lift ``l`` like value iteration
 (rate ``lambda``: the cut is a constant when the terms share no successor, as in
@@ -335,7 +337,7 @@ def monotone_cuts(
     resolve : bool
         Resolve disjunctions on the box ``[l, h]`` (default); ``False``: monotone cuts only.
     backend : {"rows", "highspy", "cvxpy"}
-        Solve each master as a row system (policy iteration, default), or as an LP with
+        Solve each master as a row system (modified policy iteration, default), or as an LP with
         highspy or through cvxpy with ``solver``; the point is certified the same way.
     on_round : callable(NLPIteration), optional
     record : list, optional
