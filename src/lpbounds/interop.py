@@ -107,16 +107,7 @@ def _check_rows(
     than one are left to :class:`~lpbounds.mdp.FiniteMDP`, which names them.
     """
     rows = np.repeat(np.arange(q.shape[0]), np.diff(q.indptr))
-    for bad, what in (
-        (~np.isfinite(q.data), "not finite"),
-        (q.data < -PROBABILITY_NEGATIVE_ATOL, "negative"),
-    ):
-        if bad.any():
-            j = int(np.flatnonzero(bad)[0])
-            raise ValidationError(
-                f"{row_name(int(rows[j]))}: the probability {q.data[j]} of next state "
-                f"{int(q.indices[j])} is {what}"
-            )
+    _check_entries(rows, q.indices, q.data, row_name)
     missing = 1.0 - np.asarray(q.sum(axis=1)).ravel()
     short = missing > PROBABILITY_SUM_ATOL
     if short.any() and not sink:
@@ -226,15 +217,22 @@ def _check_raw_entries(q: Any, row_name: Callable[[int], str]) -> None:
     if np.isfinite(data).all() and not (data < -PROBABILITY_NEGATIVE_ATOL).any():
         return
     coo = q.tocoo()  # only to name the entry
+    _check_entries(coo.row, coo.col, coo.data, row_name)
+
+
+def _check_entries(
+    rows: np.ndarray, cols: np.ndarray, data: np.ndarray, row_name: Callable[[int], str]
+) -> None:
+    """Refuse a non-finite or negative probability, naming its row and next state."""
     for bad, what in (
-        (~np.isfinite(coo.data), "not finite"),
-        (coo.data < -PROBABILITY_NEGATIVE_ATOL, "negative"),
+        (~np.isfinite(data), "not finite"),
+        (data < -PROBABILITY_NEGATIVE_ATOL, "negative"),
     ):
         if bad.any():
             j = int(np.flatnonzero(bad)[0])
             raise ValidationError(
-                f"{row_name(int(coo.row[j]))}: the probability {coo.data[j]} of next state "
-                f"{int(coo.col[j])} is {what}"
+                f"{row_name(int(rows[j]))}: the probability {data[j]} of next state "
+                f"{int(cols[j])} is {what}"
             )
 
 
