@@ -278,11 +278,11 @@ def _solve_master(
     """The master's least element over ``w`` (M,), by its row system or its LP."""
     m = lo.size
     if backend == "rows":
-        res = solve_exact(
+        dp = solve_exact(
             rows, method="mpi", tol=tol, initial=np.r_[lo, 0.0], max_iter=10_000,
             raise_on_failure=False,
         )  # fmt: skip
-        return np.asarray(res.values[:m])
+        return np.asarray(dp.values[:m])
     assert lp is not None
     if backend == "cvxpy":
         res = MonotoneMaster(lp, *n).solve(solver, raise_on_failure=False, **options)
