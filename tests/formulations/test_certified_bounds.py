@@ -207,3 +207,32 @@ def test_a_feasible_but_suboptimal_point_is_inaccurate_not_optimal():
         res = form._judge(run, 1e-6)
         assert res.status is expected
         assert (res.upper_values >= vstar - err).all() and (res.lower_values <= vstar + err).all()
+
+
+def test_with_positive_costs_optimal_means_entrywise_accuracy():
+    """A feasible point above the optimum by 5x the requested accuracy at one state (and
+    less elsewhere) has an objective within the requested accuracy times sum(c), yet is not
+    the LP's optimum: with every cost positive OPTIMAL needs the entrywise certificate.
+
+    The point is ``V* + delta h`` with ``h`` the value of reward 1 at state 0 alone:
+    ``h >= lambda P_u h`` for every ``u``, so the point satisfies every Bellman row."""
+    from lpbounds.formulations.base import _Run
+    from lpbounds.status import Status
+
+    mdp = lb.garnet(30, 3, 3, 0.9, seed=2)
+    succ, probs, allowed = mdp.successors, mdp.probabilities_full(), mdp.allowed
+    vstar, _ = _vstar(succ, probs, mdp.rewards, allowed, 0.9)
+    e0 = np.zeros(mdp.rewards.shape)
+    e0[0] = 1.0
+    h, _ = _vstar(succ, probs, e0, allowed, 0.9)
+    r_max = np.abs(mdp.rewards).max()
+    delta = 5 * 1e-6 * r_max
+    v = vstar + delta * h
+    form = ELP(mdp)
+    duals = form.solve("HIGHS").duals  # optimal duals: the objective bound is then tight
+    run = _Run("HIGHS", {}, Status.OPTIMAL, "optimal", v, duals, 0.0, 0.0, None)
+    res = form._judge(run, 1e-6)
+    lo, _ = res.objective_bracket
+    assert (v.sum() - lo) * (1 - 0.9) <= 1e-6 * r_max * 30, "the objective is within accuracy"
+    assert res.certificate.residual_up <= 1e-6 * r_max, "the point is feasible"
+    assert res.status is Status.INACCURATE

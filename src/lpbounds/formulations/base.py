@@ -498,18 +498,22 @@ class Formulation:
 
         The point must be feasible to ``accuracy * max|R|`` (its Bellman residual upward,
         so ``upper_values`` is within ``accuracy * max|R| / (1 - lambda)`` of it), and
-        either within the same of the least feasible point (downward residual) or, where
-        the optimum is not unique (costs with zeros: any feasible value of an unpriced
+        either within the same of the least feasible point (downward residual) or, only
+        where the optimum is not unique (a cost of zero: any feasible value of an unpriced
         variable is optimal), have an objective certified within ``accuracy * max|R| /
-        (1 - lambda) * sum(c)`` of the optimum by the dual bound of the bracket.
+        (1 - lambda) * sum(c)`` of the optimum by the dual bound of the bracket. With every
+        cost positive the optimum is the least feasible point, and OPTIMAL always means a
+        certified error within ``accuracy * max|R| / (1 - lambda)`` entry by entry.
         """
         tol = accuracy * cert.reward_absmax
         if cert.residual_up > tol:
             return False
         if self.upper_side_only:
             return True
-        if cert.residual_down <= tol or bracket is None:
-            return cert.residual_down <= tol
+        if cert.residual_down <= tol:
+            return True
+        if bracket is None or bool((self.c > 0).all()):
+            return False
         excess = (objective - bracket[0]) * (1.0 - cert.modulus)
         return bool(excess <= tol * float(self.c.sum()))
 
