@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
 from collections.abc import Sequence
 
@@ -102,5 +103,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exit_status(exc)
 
 
+def entry() -> None:
+    """The console script: :func:`main`, then exit with its status.
+
+    A Ctrl-C that arrives once :func:`main` has returned (its output is complete by then)
+    must not kill the interpreter by signal during shutdown (exit status -2, and possibly a
+    traceback): SIGINT is ignored from the moment :func:`main` returns, and one arriving
+    in between is still reported as an interruption (130).
+    """
+    try:
+        try:
+            code = main()
+        finally:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except KeyboardInterrupt:
+        print("lpbounds: interrupted", file=sys.stderr)
+        code = EXIT_INTERRUPTED
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    entry()
