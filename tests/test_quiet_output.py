@@ -18,6 +18,8 @@ from pathlib import Path
 
 import pytest
 
+from .test_cli import TINY_TOML
+
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = str(ROOT / "models" / "patrol-small.toml")
 
@@ -27,20 +29,6 @@ BANNER = re.compile(
     r"Running HiGHS|HiGHS \d|Copyright|THIRD_PARTY_NOTICES|Clarabel\.rs|Clever Acronym|"
     r"SCS v\d|OSQP v\d|CVXPY\s+v\d|\(c\) Paul Goulart|Coefficient ranges",
 )
-
-TINY = """[model]
-kind = "garnet"
-n_states = 12
-n_actions = 2
-branching = 3
-discount = 0.9
-seed = 5
-
-[partition]
-kind = "random"
-n_partitions = 3
-seed = 2
-"""
 
 
 def _run(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -59,7 +47,7 @@ def _run(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
 
 def _commands(tmp: Path) -> dict[str, list[str]]:
     tiny = tmp / "tiny.toml"
-    tiny.write_text(TINY)
+    tiny.write_text(TINY_TOML)
     return {
         "solve": ["solve", SMALL, "--out", str(tmp / "solve")],
         "bounds": ["bounds", SMALL, "--lp"],
