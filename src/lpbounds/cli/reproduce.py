@@ -85,7 +85,16 @@ def run(args: argparse.Namespace) -> int:
         f"partitions {c.partition_violations} of {c.partition_pairs:,}",
     )
     sw = s.sandwich
-    t.add_row("sandwich margins", f"lower {sw.lower_margin:.3e}, upper {sw.upper_margin:.3e}")
+    cert = (sw.certified_lower_margin, sw.certified_upper_margin)
+    t.add_row(
+        "sandwich margins",
+        f"lower {sw.lower_margin:.3e}, upper {sw.upper_margin:.3e}; "
+        + (
+            f"certified (LP brackets and V*'s error bound) {cert[0]:.3e}, {cert[1]:.3e}"
+            if cert[0] is not None and cert[1] is not None
+            else "not certified (an LP returned no point)"
+        ),
+    )
     po = s.policy
     t.add_row(
         "pi_s",
