@@ -39,7 +39,6 @@ __all__ = [
     "lp_objective_bracket",
 ]
 
-_EPS = float(np.finfo(np.float64).eps)
 _TINY = float(np.finfo(np.float64).tiny)
 _ORDER = {Verdict.HOLDS: 0, Verdict.INCONCLUSIVE: 1, Verdict.VIOLATED: 2}
 

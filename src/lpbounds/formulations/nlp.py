@@ -812,6 +812,25 @@ class NLP:
             on_round=tick,
             **(opts["solver_options"] or {}),
         )
+        solver = (
+            "HIGHS (highspy, persistent)" if backend == "highspy" else f"{opts['solver']} (cvxpy)"
+        )
+        return self._cut_outcome(
+            out,
+            solver,
+            {
+                "cut_alpha": out.cut_alpha,
+                "cut_beta": out.cut_beta,
+                "master_point": out.master_point,
+                "master_objective": out.master_objective,
+                "cuts_in_last_master": out.cuts_in_last_master,
+                "box": self.box,
+            },
+        )
+
+    @staticmethod
+    def _cut_outcome(out: Any, solver: str, extra: dict[str, Any]) -> _Outcome:
+        """The outcome of either cut loop: its point, stop, limit, rounds, log and bracket."""
         limits = {"max_rounds": Status.ITERATION_LIMIT, "time_limit": Status.TIME_LIMIT}
         return _Outcome(
             out.best_point,
@@ -821,18 +840,8 @@ class NLP:
             cuts=out.cuts,
             log=out.log,
             keep_log_bracket=True,
-            solver="HIGHS (highspy, persistent)"
-            if backend == "highspy"
-            else f"{opts['solver']} (cvxpy)",
-            extra={
-                "method_bracket": (out.lower, out.upper),
-                "cut_alpha": out.cut_alpha,
-                "cut_beta": out.cut_beta,
-                "master_point": out.master_point,
-                "master_objective": out.master_objective,
-                "cuts_in_last_master": out.cuts_in_last_master,
-                "box": self.box,
-            },
+            solver=solver,
+            extra={"method_bracket": (out.lower, out.upper), **extra},
         )
 
     def _monotone(
@@ -853,22 +862,14 @@ class NLP:
             **(opts["solver_options"] or {}),
         )
         self._master, self._master_pending = None, out.master
-        limits = {"max_rounds": Status.ITERATION_LIMIT, "time_limit": Status.TIME_LIMIT}
         solver = {
             "rows": "none (row-system master, modified policy iteration)",
             "highspy": "HIGHS (highspy)",
         }.get(backend, f"{opts['solver']} (cvxpy)")
-        return _Outcome(
-            out.best_point,
-            stop_reason=out.stop_reason,
-            limit=limits.get(out.stop_reason),
-            iterations=out.rounds,
-            cuts=out.cuts,
-            log=out.log,
-            keep_log_bracket=True,
-            solver=solver,
-            extra={
-                "method_bracket": (out.lower, out.upper),
+        return self._cut_outcome(
+            out,
+            solver,
+            {
                 "cut_family": "monotone",
                 "loop_lower_values": out.lower_values,
                 "loop_upper_values": out.upper_values,
