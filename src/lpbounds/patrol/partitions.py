@@ -21,6 +21,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from ..errors import ValidationError
 from .params import PatrolParams
@@ -30,6 +31,7 @@ __all__ = [
     "decode_partition",
     "partition_components",
     "partition_index",
+    "state_partition_kernel",
 ]
 
 
@@ -89,6 +91,34 @@ def partition_index(
     within_l = np.where(acode_l == 0, 0, 1 + (acode_l - 1) * g + (tb - 1))
     idx_l = 2 * n_nodes * tb_size + (k * big_d + d - 1) * lb_size + within_l
     return np.where(travel, idx_t, idx_l)
+
+
+@njit(cache=True, nogil=True)
+def state_partition_kernel(
+    l, w, d, tau, station_pos, n_nodes, big_d, gamma, tb_size, lb_size
+):  # pragma: no cover - compiled
+    """:func:`partition_index` of one state given by its components, compiled (scalar).
+
+    ``tau`` is the state's delay vector (length m); ``tb_size, lb_size`` are
+    :func:`block_sizes`. For the matrix-free kernels that act states out one at a time;
+    tested equal to :func:`partition_index` on every state of small instances.
+    """
+    m = tau.shape[0]
+    acode = 0
+    tb = 0
+    for j in range(m):
+        acode = 2 * acode + (1 if tau[j] > 0 else 0)
+        if tau[j] > tb:
+            tb = tau[j]
+    if d == 0:
+        within = 0 if acode == 0 else 1 + (acode - 1) * gamma + (tb - 1)
+        return (2 * l + (1 if w < 0 else 0)) * tb_size + within
+    k = station_pos[l]
+    low = acode & ((1 << (m - 1 - k)) - 1)
+    high = acode >> (m - k)
+    acode_l = (high << (m - 1 - k)) | low
+    within = 0 if acode_l == 0 else 1 + (acode_l - 1) * gamma + (tb - 1)
+    return 2 * n_nodes * tb_size + (k * big_d + d - 1) * lb_size + within
 
 
 def _check_keys(

@@ -1,0 +1,757 @@
+r"""The greedy policy ``pi_s`` beyond exact DP: acted out on the fly, valued by Monte Carlo.
+
+At 8 stations (``models/patrol-m8.toml``: 4.2e10 states) no successor array, no value
+vector over states and no exact ``V*`` exist; the partition bounds do (``M = 207,928``,
+:func:`partition_bounds`, seconds). This module acts out ``pi_s``, the policy greedy
+with respect to the lower bound ``w*`` lifted to states (``V_low(x) = w*(i(x))``, paper
+eq. 30), one state at a time:
+
+* the successors of a state come from the model's own compiled dynamics
+  (:func:`lpbounds.patrol.model._successor_kernel`), their components from its decoder
+  (``_decode_kernel``) and their partitions from
+  :func:`lpbounds.patrol.partitions.state_partition_kernel`;
+* ``Q(x, u) = R_u(x) + lambda sum_l p_l w*(i(f(x, u, Y_l)))`` is summed in outcome
+  order exactly as :func:`lpbounds.dp.greedy_policy` sums it, and the action is chosen
+  with its tie rule (every action within
+  ``GREEDY_TIE_RTOL * max(1, |max Q|)`` of the best is tied; the lowest index wins), so
+  on an instance small enough for the MDP the two policies are equal state by state.
+
+Value by Monte Carlo (:func:`greedy_value_mc`)
+----------------------------------------------
+From each start state ``x``, ``paths`` independent trajectories of ``horizon`` steps,
+with the alert stream of :func:`lpbounds.patrol.simulation.alert_sequence`, give the
+truncated discounted returns ``G_H = sum_{t<H} lambda^t R(x_t, pi_s(x_t))``. The
+estimate ``V_hat(x)`` is their mean; the interval is Student's t at the given level
+(95 % by default), ``V_hat +- (t_{n-1} s / sqrt(n) + trunc)``, where the truncation error
+is bounded exactly: ``|V_pis(x) - E G_H| <= trunc = lambda^H max|R| / (1 - lambda)``.
+Beside it, the certified upper bound ``v*(i(x))`` (UBLP, plus its certified error) gives
+the statistical certificate, at that level for each start separately:
+
+    ``V*(x) - V_pis(x) <= v*(i(x)) + err(v*) - V_hat(x) + half-width + trunc``.
+
+The intervals hold for each start at the stated level, not simultaneously (for that,
+pass ``level = 1 - 0.05 / n_starts``, Bonferroni).
+
+Table 1 (:func:`greedy_table1`)
+-------------------------------
+Long trajectories of ``pi_s`` with the alert sequences of the 4-station run (same seeds,
+steps and start state), counted by :func:`lpbounds.patrol.simulation.simulate` itself:
+the visited states form a small MDP (one row per visited state, the taken transitions
+filled in), on which ``simulate`` applies every counting convention of the paper's
+Table 1 and checks each step against the specification's dynamics
+(``mismatches`` must be 0); :func:`~lpbounds.patrol.simulation.pooled_statistics` pools
+the seeds.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit, prange
+from scipy import stats
+
+from .._defaults import DEFAULT_SEEDS
+from ..dp import solve_exact
+from ..errors import ConsistencyError, ValidationError
+from ..mdp import FiniteMDP
+from ..tolerances import GREEDY_TIE_RTOL
+from ..validation import check_int, check_real, check_vector
+from .bounds import patrol_rows
+from .model import ACTION_NAMES, PatrolModel, _decode_kernel, _successor_kernel
+from .params import PatrolParams
+from .partitions import block_sizes, state_partition_kernel
+from .simulation import SimulationResult, alert_sequence, pooled_statistics, simulate
+from .summary import PolicyStatistics
+
+__all__ = [
+    "GreedyTable1",
+    "GreedyValueEstimate",
+    "PartitionBounds",
+    "default_starts",
+    "greedy_actions",
+    "greedy_simulate",
+    "greedy_table1",
+    "greedy_value_mc",
+    "partition_bounds",
+    "reward_absmax",
+    "truncation_bound",
+]
+
+#: Default truncation error: the horizon is the smallest with ``trunc <= TRUNCATION_TARGET``.
+TRUNCATION_TARGET = 1e-6
+
+
+# ---------------------------------------------------------------------- bounds
+@dataclass(frozen=True)
+class PartitionBounds:
+    """LBLP's ``w*`` and UBLP's ``v*`` over the partitions, with certified errors.
+
+    Attributes
+    ----------
+    lower, upper : ndarray (M,)
+        The fixed points of the LBLP and UBLP rows (:func:`patrol_rows`).
+    lower_error, upper_error : float
+        Their certified distance to the exact optima (``residual / (1 - lambda)``).
+    seconds : float
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    lower_error: float
+    upper_error: float
+    seconds: float
+
+
+def partition_bounds(params: PatrolParams) -> PartitionBounds:
+    """``w*`` and ``v*`` from the partitions alone (as ``lpbounds bounds`` computes them)."""
+    t0 = time.perf_counter()
+    low = solve_exact(patrol_rows(params, "lower"))
+    up = solve_exact(patrol_rows(params, "upper"))
+    return PartitionBounds(
+        lower=low.values,
+        upper=up.values,
+        lower_error=float(low.error_bound),
+        upper_error=float(up.error_bound),
+        seconds=time.perf_counter() - t0,
+    )
+
+
+# ---------------------------------------------------------------------- compiled steps
+@dataclass(frozen=True)
+class _Kernel:
+    """The model's constants in the form the compiled kernels take."""
+
+    cfg: np.ndarray  # n_nodes, big_d, gamma, radix, n_travel, tb_size, lb_size, allow_empty
+    station_pos: np.ndarray
+    stations: np.ndarray
+    w_travel: np.ndarray
+    w_loiter: np.ndarray
+    probs: np.ndarray
+    inc: np.ndarray
+    rho: float
+    discount: float
+    m: int
+
+    @classmethod
+    def of(cls, params: PatrolParams) -> _Kernel:
+        pm = PatrolModel(params)
+        tb_size, lb_size = block_sizes(params)
+        cfg = [params.N, params.D, params.Gamma, pm.radix, pm.n_travel, tb_size, lb_size]
+        cfg.append(int(params.allow_empty_loiter))
+        return cls(
+            cfg=np.array(cfg, dtype=np.int64),
+            station_pos=np.ascontiguousarray(pm.station_pos, dtype=np.int64),
+            stations=pm.stations,
+            w_travel=pm.w_travel,
+            w_loiter=pm.w_loiter,
+            probs=np.ascontiguousarray(params.alert_probabilities(), dtype=np.float64),
+            inc=np.ascontiguousarray(params.information_increments(), dtype=np.float64),
+            rho=float(params.rho),
+            discount=float(params.discount),
+            m=params.m,
+        )
+
+    def args(self) -> tuple[Any, ...]:
+        """The tuple ``mt`` the kernels take (with the greedy tie tolerance)."""
+        return (
+            self.cfg,
+            self.station_pos,
+            self.stations,
+            self.w_travel,
+            self.w_loiter,
+            self.probs,
+            self.inc,
+            self.rho,
+            self.discount,
+            GREEDY_TIE_RTOL,
+        )
+
+
+@njit(cache=True, nogil=True)
+def _buffers(m):  # pragma: no cover - compiled
+    """Per-trajectory work arrays: the state ``cur`` (l, w, d) and ``tau`` (1, m), and per
+    action the successor indices ``succ[a, 0]`` and their components."""
+    cur = np.zeros(3, np.int64)
+    tau = np.zeros((1, m), np.int16)
+    succ = np.zeros((3, 1, m + 1), np.int64)
+    nl = np.zeros((3, m + 1), np.int64)
+    nw = np.zeros((3, m + 1), np.int64)
+    nd = np.zeros((3, m + 1), np.int64)
+    ntau = np.zeros((3, m + 1, m), np.int16)
+    return cur, tau, succ, nl, nw, nd, ntau
+
+
+@njit(cache=True, nogil=True)
+def _set_state(x, mt, buf):  # pragma: no cover - compiled
+    """Decode state ``x`` into the current state of ``buf`` (action 0's slots as scratch)."""
+    cfg, stations = mt[0], mt[2]
+    cur, tau, _succ, nl, nw, nd, ntau = buf
+    xs = np.empty(1, np.int64)
+    xs[0] = x
+    m = tau.shape[1]
+    _decode_kernel(
+        xs, cfg[4], cfg[3], m, cfg[1], stations, nl[0, :1], nw[0, :1], nd[0, :1], ntau[0, :1]
+    )
+    cur[0], cur[1], cur[2] = nl[0, 0], nw[0, 0], nd[0, 0]
+    tau[0, :] = ntau[0, 0, :]
+
+
+@njit(cache=True, nogil=True)
+def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
+    """``lambda sum_l p_l lower[i(f(x, a, Y_l))]`` summed in outcome order, as
+    :func:`lpbounds.dp.greedy_policy` sums it; fills the action's successor slots."""
+    cfg, station_pos, stations, w_travel, w_loiter, probs = mt[0], mt[1], mt[2], mt[3], mt[4], mt[5]
+    cur, tau, succ, nl, nw, nd, ntau = buf
+    m = tau.shape[1]
+    n_nodes, big_d, gamma, radix, n_travel = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
+    _successor_kernel(
+        cur[0:1], cur[1:2], cur[2:3], tau, a, n_nodes, big_d, gamma, radix, n_travel,
+        station_pos, w_travel, w_loiter, succ[a],
+    )  # fmt: skip
+    _decode_kernel(succ[a, 0], n_travel, radix, m, big_d, stations, nl[a], nw[a], nd[a], ntau[a])
+    acc = 0.0
+    for y in range(m + 1):
+        part = state_partition_kernel(
+            nl[a, y], nw[a, y], nd[a, y], ntau[a, y], station_pos, n_nodes, big_d, gamma,
+            cfg[5], cfg[6],
+        )  # fmt: skip
+        acc += probs[y] * lower[part]
+    return mt[8] * acc
+
+
+@njit(cache=True, nogil=True)
+def _greedy_step(lower, mt, buf):  # pragma: no cover - compiled
+    """The greedy action at ``buf``'s current state and its reward ``R_u(x)``; fills the
+    successor slots of every allowed action."""
+    cfg, station_pos, inc, rho, tie_rtol = mt[0], mt[1], mt[6], mt[7], mt[9]
+    cur, tau = buf[0], buf[1]
+    l, d, big_d, gamma = cur[0], cur[2], cfg[1], cfg[2]
+    k = station_pos[l]
+    tbar = 0
+    for j in range(tau.shape[1]):
+        tbar = max(tbar, tau[0, j])
+    pen = -rho * float(min(tbar, gamma))
+    n_act = 2
+    if k >= 0 and d < big_d and (d >= 1 or tau[0, k] > 0 or cfg[7] != 0):
+        n_act = 3
+    q = np.empty(3)
+    best = -np.inf
+    for a in range(n_act):
+        r = pen + inc[d] if a == 2 else pen
+        q[a] = r + _q_value(a, lower, mt, buf)
+        best = max(best, q[a])
+    thr = best - tie_rtol * max(1.0, abs(best))
+    best_a = 0
+    for a in range(n_act - 1, -1, -1):
+        if q[a] >= thr:
+            best_a = a
+    return best_a, (pen + inc[d] if best_a == 2 else pen)
+
+
+@njit(cache=True, nogil=True)
+def _advance(a, y, buf):  # pragma: no cover - compiled
+    """Move to the successor of action ``a`` under outcome ``y``; return its index."""
+    cur, tau, succ, nl, nw, nd, ntau = buf
+    cur[0], cur[1], cur[2] = nl[a, y], nw[a, y], nd[a, y]
+    tau[0, :] = ntau[a, y, :]
+    return succ[a, 0, y]
+
+
+@njit(cache=True, nogil=True)
+def _actions_kernel(xs, lower, mt, out):  # pragma: no cover - compiled
+    """``out[i]``: the greedy action at state ``xs[i]``."""
+    buf = _buffers(mt[3].shape[0])
+    for i in range(xs.shape[0]):
+        _set_state(xs[i], mt, buf)
+        out[i] = _greedy_step(lower, mt, buf)[0]
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _returns_kernel(x0, outcomes, lower, mt, out):  # pragma: no cover - compiled
+    """``out[p]``: the discounted return of path ``p`` from ``x0`` under ``outcomes[p]``."""
+    n_paths, horizon = outcomes.shape
+    discount = mt[8]
+    for p in prange(n_paths):
+        buf = _buffers(mt[3].shape[0])
+        _set_state(x0, mt, buf)
+        g = 0.0
+        disc = 1.0
+        for t in range(horizon):
+            a, r = _greedy_step(lower, mt, buf)
+            g += disc * r
+            disc *= discount
+            _advance(a, outcomes[p, t], buf)
+        out[p] = g
+
+
+@njit(cache=True, nogil=True)
+def _trajectory_kernel(x0, outcomes, lower, mt, states, actions):  # pragma: no cover - compiled
+    """One trajectory: ``states[t]`` (``t = 0..T``) and ``actions[t]`` (``t < T``)."""
+    buf = _buffers(mt[3].shape[0])
+    _set_state(x0, mt, buf)
+    x = x0
+    for t in range(outcomes.shape[0]):
+        states[t] = x
+        a = _greedy_step(lower, mt, buf)[0]
+        actions[t] = a
+        x = _advance(a, outcomes[t], buf)
+    states[outcomes.shape[0]] = x
+
+
+# ---------------------------------------------------------------------- inputs
+def _lower(params: PatrolParams, lower: Any, name: str = "lower") -> np.ndarray:
+    """A partition value vector (length M, finite), as the kernels read it."""
+    return check_vector(name, lower, params.n_partitions)
+
+
+def _states(params: PatrolParams, x: Any, name: str) -> np.ndarray:
+    """State indices (int64, in ``[0, |S|)``), refused with the offending entry named."""
+    arr = np.asarray(x)
+    if arr.ndim != 1 or arr.size == 0 or not np.issubdtype(arr.dtype, np.integer):
+        raise ValidationError(
+            f"{name} must be a non-empty 1-d array of state indices; got {arr.dtype} {arr.shape}"
+        )
+    n = params.n_states
+    bad = np.flatnonzero((arr < 0) | (arr >= n))
+    if bad.size:
+        raise ValidationError(f"{name}[{bad[0]}] = {arr[bad[0]]} is not a state index in [0, {n})")
+    return np.ascontiguousarray(arr, dtype=np.int64)
+
+
+def reward_absmax(params: PatrolParams) -> float:
+    """``max |R_u(x)|`` over every state and action (an exact bound, from the parameters).
+
+    ``R`` is ``-rho min(taubar, Gamma)``, plus ``I(d+1) - I(d)`` for a loiter at dwell
+    ``d``: affine in ``taubar``, so the extremes are at ``taubar = 0`` or ``Gamma``.
+    """
+    pen = params.rho * params.Gamma
+    inc = np.abs(params.information_increments())
+    shifted = np.abs(params.information_increments() - pen)
+    return float(max(pen, inc.max(initial=0.0), shifted.max(initial=0.0)))
+
+
+def truncation_bound(params: PatrolParams, horizon: int) -> float:
+    """``lambda^H max|R| / (1 - lambda)``: how far a return cut at ``H`` steps can be from
+    the infinite-horizon one, on every path."""
+    horizon = check_int("horizon", horizon, lo=1)
+    lam = params.discount
+    return float(lam**horizon * reward_absmax(params) / (1.0 - lam))
+
+
+def default_horizon(params: PatrolParams, target: float = TRUNCATION_TARGET) -> int:
+    """The smallest horizon whose :func:`truncation_bound` is at most ``target``."""
+    target = check_real("target", target, lo=0.0, lo_open=True)
+    lam, rmax = params.discount, reward_absmax(params)
+    if lam == 0.0 or rmax == 0.0:
+        return 1
+    h = max(1, math.ceil(math.log(target * (1.0 - lam) / rmax) / math.log(lam)))
+    while truncation_bound(params, h) > target:  # rounding of the logarithms
+        h += 1
+    return h
+
+
+def default_starts(params: PatrolParams, *, n_random: int = 12, seed: int = 0) -> np.ndarray:
+    """The documented start states of :func:`greedy_value_mc`.
+
+    First the ``m`` states "at station ``k``, heading clockwise, not loitering, no alert"
+    (``l = stations[k], w = +1, d = 0, tau = 0``), then ``n_random`` state indices drawn
+    uniformly from ``[0, |S|)`` (``numpy.random.default_rng(seed)``; duplicates kept).
+    """
+    n_random = check_int("n_random", n_random, lo=0)
+    seed = check_int("seed", seed, lo=0)
+    pm = PatrolModel(params)
+    st = np.asarray(params.stations, dtype=np.int64)
+    zero = pm.encode(st, np.ones_like(st), np.zeros_like(st), np.zeros((st.size, params.m)))
+    rng = np.random.default_rng(seed)
+    rand = rng.integers(0, params.n_states, size=n_random, dtype=np.int64)
+    return np.concatenate([zero, rand]).astype(np.int64)
+
+
+# ---------------------------------------------------------------------- the policy
+def greedy_actions(params: PatrolParams, lower: Any, states: Any) -> np.ndarray:
+    """``pi_s`` at the given states, computed on the fly (no MDP arrays).
+
+    Parameters
+    ----------
+    params : PatrolParams
+    lower : array (M,)
+        The partition values the policy is greedy for (``w*`` of LBLP).
+    states : array of int
+        State indices (the model's encoding, :class:`~lpbounds.patrol.model.PatrolModel`).
+
+    Returns
+    -------
+    ndarray of int8
+        Action index per state (0 continue, 1 reverse, 2 loiter), chosen with the tie
+        rule of :func:`lpbounds.dp.greedy_policy`.
+    """
+    v = _lower(params, lower)
+    xs = _states(params, states, "states")
+    out = np.empty(xs.size, dtype=np.int8)
+    k = _Kernel.of(params)
+    _actions_kernel(xs, v, k.args(), out)
+    return out
+
+
+# ---------------------------------------------------------------------- value by Monte Carlo
+@dataclass(frozen=True)
+class GreedyValueEstimate:
+    """Monte Carlo value of ``pi_s`` from a set of start states, beside the bounds.
+
+    Attributes (arrays have one entry per start)
+    --------------------------------------------
+    starts : ndarray of int64
+        Start state indices; ``partitions`` their partition indices.
+    mean : ndarray
+        ``V_hat(x)``: the mean truncated discounted return over ``paths`` paths.
+    std : ndarray
+        Sample standard deviation of the returns (``ddof = 1``).
+    half_width : ndarray
+        Student's t half-width at ``level``: ``t_{paths-1} std / sqrt(paths)``.
+    truncation : float
+        ``lambda^horizon max|R| / (1 - lambda)``, added to every interval.
+    ci_low, ci_high : ndarray
+        ``mean -+ (half_width + truncation)``: the interval on ``V_pis(x)``.
+    upper : ndarray
+        ``v*(i(x))`` (UBLP, lifted); ``upper_error`` its certified error.
+    lower : ndarray
+        ``w*(i(x))`` (LBLP, lifted): ``pi_s``'s own lower bound, for comparison.
+    gap_bound : ndarray
+        ``v*(i(x)) + upper_error - ci_low``: at ``level``, ``V*(x) - V_pis(x)`` is at
+        most this (the statistical certificate).
+    paths, horizon, level, seed : int, int, float, int
+    interval : str
+        ``"student-t"``.
+    seconds : float
+        Wall time of the simulation (compiled kernels; the first call also compiles).
+    """
+
+    starts: np.ndarray
+    partitions: np.ndarray
+    mean: np.ndarray
+    std: np.ndarray
+    half_width: np.ndarray
+    truncation: float
+    ci_low: np.ndarray
+    ci_high: np.ndarray
+    upper: np.ndarray
+    upper_error: float
+    lower: np.ndarray
+    gap_bound: np.ndarray
+    paths: int
+    horizon: int
+    level: float
+    seed: int
+    interval: str
+    seconds: float
+
+    @property
+    def n_starts(self) -> int:
+        return int(self.starts.size)
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One dict per start, for tables and JSON."""
+        keys = ("mean", "std", "half_width", "ci_low", "ci_high", "upper", "lower", "gap_bound")
+        out = []
+        for i in range(self.n_starts):
+            row: dict[str, Any] = {
+                "state": int(self.starts[i]),
+                "partition": int(self.partitions[i]),
+            }
+            row.update({k: float(getattr(self, k)[i]) for k in keys})
+            out.append(row)
+        return out
+
+
+def _start_states(params: PatrolParams, starts: Any, seed: int) -> np.ndarray:
+    if starts is None:
+        return default_starts(params, seed=seed)
+    if isinstance(starts, (int, np.integer)) and not isinstance(starts, bool):
+        n = check_int("starts", starts, lo=params.m)
+        return default_starts(params, n_random=n - params.m, seed=seed)
+    return _states(params, starts, "starts")
+
+
+def greedy_value_mc(
+    params: PatrolParams,
+    lower: Any,
+    upper: Any,
+    *,
+    starts: Any = None,
+    paths: int = 10_000,
+    horizon: int | None = None,
+    level: float = 0.95,
+    upper_error: float = 0.0,
+    seed: int = 0,
+) -> GreedyValueEstimate:
+    """Estimate ``V_pis`` by Monte Carlo and bound ``V* - V_pis`` with ``v*``.
+
+    Parameters
+    ----------
+    params : PatrolParams
+    lower, upper : array (M,)
+        ``w*`` (LBLP: ``pi_s`` is greedy for it) and ``v*`` (UBLP) over the partitions,
+        as :func:`partition_bounds` returns them.
+    starts : None, int or array of int
+        Start states: ``None`` for :func:`default_starts` (the ``m`` empty stations and
+        12 seeded random states), an int ``n >= m`` for the ``m`` stations and
+        ``n - m`` random states, or explicit state indices.
+    paths : int
+        Independent paths per start (>= 2).
+    horizon : int, optional
+        Steps per path; default :func:`default_horizon` (truncation error <= 1e-6).
+    level : float
+        Confidence level of each start's Student's t interval (default 95 %).
+    upper_error : float
+        Certified error of ``upper`` (``PartitionBounds.upper_error``), added to the
+        certificate.
+    seed : int
+        Seeds the random starts and, with the start's position, each start's alert
+        stream (:func:`~lpbounds.patrol.simulation.alert_sequence`).
+
+    Returns
+    -------
+    GreedyValueEstimate
+
+    Raises
+    ------
+    ValidationError
+        Naming the argument: a bound vector of the wrong length or not finite, a start
+        that is not a state, ``paths < 2``, ``horizon < 1``, ``level`` outside (0, 1).
+    """
+    lo = _lower(params, lower, "lower")
+    up = _lower(params, upper, "upper")
+    seed = check_int("seed", seed, lo=0)
+    paths = check_int("paths", paths, lo=2)
+    horizon = default_horizon(params) if horizon is None else check_int("horizon", horizon, lo=1)
+    level = check_real("level", level, lo=0.0, hi=1.0, lo_open=True, hi_open=True)
+    upper_error = check_real("upper_error", upper_error, lo=0.0)
+    xs = _start_states(params, starts, seed)
+    k = _Kernel.of(params)
+    p0 = float(k.probs[0])
+    returns = np.empty((xs.size, paths))
+    t0 = time.perf_counter()
+    for i, x in enumerate(xs):
+        sub = int(np.random.SeedSequence([seed, i]).generate_state(1)[0])
+        y = alert_sequence(paths * horizon, p0, params.m, sub).reshape(paths, horizon)
+        _returns_kernel(int(x), y, lo, k.args(), returns[i])
+    seconds = time.perf_counter() - t0
+    return _estimate(params, xs, returns, lo, up, upper_error, horizon, level, seed, seconds)
+
+
+def _estimate(
+    params: PatrolParams,
+    xs: np.ndarray,
+    returns: np.ndarray,
+    lo: np.ndarray,
+    up: np.ndarray,
+    upper_error: float,
+    horizon: int,
+    level: float,
+    seed: int,
+    seconds: float,
+) -> GreedyValueEstimate:
+    """Means, Student's t intervals widened by the truncation bound, and the certificate."""
+    paths = returns.shape[1]
+    mean = returns.mean(axis=1)
+    std = returns.std(axis=1, ddof=1)
+    half = float(stats.t.ppf(0.5 + level / 2, paths - 1)) * std / math.sqrt(paths)
+    trunc = truncation_bound(params, horizon)
+    pm = PatrolModel(params)
+    parts = pm.state_partition(xs)
+    ci_low = mean - half - trunc
+    return GreedyValueEstimate(
+        starts=xs,
+        partitions=parts,
+        mean=mean,
+        std=std,
+        half_width=half,
+        truncation=trunc,
+        ci_low=ci_low,
+        ci_high=mean + half + trunc,
+        upper=up[parts],
+        upper_error=upper_error,
+        lower=lo[parts],
+        gap_bound=up[parts] + upper_error - ci_low,
+        paths=paths,
+        horizon=horizon,
+        level=level,
+        seed=seed,
+        interval="student-t",
+        seconds=seconds,
+    )
+
+
+# ---------------------------------------------------------------------- Table 1
+class _VisitedModel:
+    """The states one trajectory visited, as the model :func:`simulate` reads: ``params``
+    and ``mdp()`` (one state per visited state, the taken transitions filled in)."""
+
+    def __init__(self, params: PatrolParams, mdp: FiniteMDP) -> None:
+        self.params = params
+        self._mdp = mdp
+
+    def mdp(self) -> FiniteMDP:
+        return self._mdp
+
+
+def _visited_chain(
+    params: PatrolParams, states: np.ndarray, actions: np.ndarray, outcomes: np.ndarray
+) -> tuple[_VisitedModel, np.ndarray, np.ndarray, int]:
+    """(model, local policy, components, local start) of a trajectory's visited states."""
+    pm = PatrolModel(params)
+    uniq, inv = np.unique(states, return_inverse=True)
+    n = uniq.size
+    l, w, d, tau = pm.decode(uniq)
+    allowed = pm.allowed(l, d, tau)
+    policy = np.zeros(n, dtype=np.int64)  # continue (always allowed) at an unvisited end
+    policy[inv[:-1]] = actions
+    if not np.array_equal(policy[inv[:-1]], actions):  # pragma: no cover - a deterministic policy
+        raise ConsistencyError("pi_s chose two different actions in one state")
+    succ = np.empty((n, 3, params.m + 1), dtype=np.int64)
+    succ[:] = np.arange(n)[:, None, None]
+    succ[inv[:-1], actions, outcomes] = inv[1:]
+    rewards = pm.rewards(d, tau)
+    rewards[~allowed] = 0.0
+    mdp = FiniteMDP(
+        succ,
+        params.alert_probabilities(),
+        rewards,
+        params.discount,
+        allowed=allowed,
+        action_names=ACTION_NAMES,
+        copy=False,
+    )
+    comps = np.column_stack([l, w, d, tau]).astype(np.int64)
+    return _VisitedModel(params, mdp), policy, comps, int(inv[0])
+
+
+def greedy_simulate(
+    params: PatrolParams,
+    lower: Any,
+    outcomes: Any,
+    *,
+    start: int | None = None,
+    seed: int | None = None,
+) -> SimulationResult:
+    """One trajectory of ``pi_s`` under the given alert sequence, counted by
+    :func:`~lpbounds.patrol.simulation.simulate` (every convention of Table 1).
+
+    Parameters
+    ----------
+    params : PatrolParams
+    lower : array (M,)
+        ``w*``, the partition values ``pi_s`` is greedy for.
+    outcomes : array of int
+        The disturbance of each step (:func:`~lpbounds.patrol.simulation.alert_sequence`).
+    start : int, optional
+        Initial state index; default ``simulate``'s: ``l = 0, w = +1, d = 0``, no alert.
+    seed : int, optional
+        Recorded in the result (the seed that made ``outcomes``).
+
+    Raises
+    ------
+    ValidationError
+        If ``lower``, ``outcomes`` or ``start`` do not fit the model.
+    ConsistencyError
+        If a step disagrees with the specification's dynamics (``simulate``'s check).
+    """
+    lo = _lower(params, lower)
+    y = np.asarray(outcomes)
+    if y.ndim != 1 or y.size == 0 or not np.issubdtype(y.dtype, np.integer):
+        raise ValidationError(f"outcomes must be a non-empty 1-d integer array; got {y.shape}")
+    if y.min() < 0 or y.max() > params.m:
+        bad = int(np.flatnonzero((y < 0) | (y > params.m))[0])
+        raise ValidationError(f"outcomes[{bad}] = {y[bad]} is not an outcome 0..{params.m}")
+    y = np.ascontiguousarray(y, dtype=np.int64)
+    pm = PatrolModel(params)
+    if start is None:
+        x0 = int(pm.encode(0, 1, 0, np.zeros((1, params.m), dtype=np.int64))[0])
+    else:
+        x0 = int(_states(params, np.array([start]), "start")[0])
+    res, _ = _greedy_run(params, lo, y, x0, seed)
+    return res
+
+
+def _greedy_run(
+    params: PatrolParams, lo: np.ndarray, y: np.ndarray, x0: int, seed: int | None
+) -> tuple[SimulationResult, np.ndarray]:
+    """:func:`greedy_simulate` on checked inputs; also the visited state indices."""
+    states = np.empty(y.size + 1, dtype=np.int64)
+    actions = np.empty(y.size, dtype=np.int64)
+    k = _Kernel.of(params)
+    _trajectory_kernel(x0, y, lo, k.args(), states, actions)
+    model, policy, comps, x_local = _visited_chain(params, states, actions, y)
+    res = simulate(model, policy, y, start=x_local, policy_name="pi_s", seed=seed, components=comps)
+    if res.mismatches:
+        raise ConsistencyError(
+            f"pi_s trajectory (seed {seed}): {res.mismatches} steps disagree with the "
+            f"specification's dynamics (first at step {res.first_mismatch})"
+        )
+    res.final_state = int(states[-1])  # the model's index, not the visited chain's
+    return res, states
+
+
+@dataclass(frozen=True)
+class GreedyTable1:
+    """Table 1's row of ``pi_s`` at one size (pooled over the seeds).
+
+    Attributes
+    ----------
+    statistics : PolicyStatistics
+        :func:`~lpbounds.patrol.simulation.pooled_statistics` of the runs: mean loiters,
+        mean and worst service delay under every convention of the 4-station table.
+    seeds : list of int
+    steps : int
+        Steps per seed.
+    visited_states : int
+        Distinct states the runs visited (of ``|S|``).
+    seconds : float
+    """
+
+    statistics: PolicyStatistics
+    seeds: list[int]
+    steps: int
+    visited_states: int
+    seconds: float
+
+
+def greedy_table1(
+    params: PatrolParams,
+    lower: Any,
+    *,
+    steps: int = 60_000,
+    seeds: Sequence[int] = DEFAULT_SEEDS,
+) -> GreedyTable1:
+    """Table 1 for ``pi_s``: ``steps`` steps per seed, pooled, as at 4 stations.
+
+    The alert sequence of each seed is ``alert_sequence(steps, p_0, m, seed)`` and the
+    start is ``simulate``'s default, as in :func:`lpbounds.patrol.reproduce.reproduce`
+    (defaults: its 5 seeds and 60,000 steps).
+    """
+    lo = _lower(params, lower)
+    steps = check_int("steps", steps, lo=1)
+    seed_list = [check_int(f"seeds[{i}]", s, lo=0) for i, s in enumerate(seeds)]
+    if not seed_list:
+        raise ValidationError("seeds must name at least one seed")
+    p0 = float(params.alert_probabilities()[0])
+    t0 = time.perf_counter()
+    pm = PatrolModel(params)
+    x0 = int(pm.encode(0, 1, 0, np.zeros((1, params.m), dtype=np.int64))[0])
+    runs, visited = [], []
+    for s in seed_list:
+        res, states = _greedy_run(params, lo, alert_sequence(steps, p0, params.m, s), x0, s)
+        runs.append(res)
+        visited.append(states)
+    return GreedyTable1(
+        statistics=PolicyStatistics(**pooled_statistics(runs)),
+        seeds=seed_list,
+        steps=steps,
+        visited_states=int(np.unique(np.concatenate(visited)).size),
+        seconds=time.perf_counter() - t0,
+    )
