@@ -9,14 +9,29 @@ with its output off), re-exported so a caller needs one import.
 
 from __future__ import annotations
 
+import time
+from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as _CvxpyHIGHS
 
 from .._quiet import quiet_highs
+from ..errors import ValidationError
+from ..status import Status
 
-__all__ = ["highs_lp", "quiet_highs"]
+__all__ = [
+    "STATUS_MAP",
+    "CvxpyHighs",
+    "HighsRun",
+    "highs_lp",
+    "quiet_highs",
+    "run_highs",
+    "set_options",
+    "tight_basis",
+]
 
 
 def highs_lp(A: sp.spmatrix | sp.sparray, b: np.ndarray, c: np.ndarray) -> Any:
@@ -63,3 +78,200 @@ def highs_lp(A: sp.spmatrix | sp.sparray, b: np.ndarray, c: np.ndarray) -> Any:
     lp.a_matrix_.index_ = a.indices.astype(np.int32, copy=False)
     lp.a_matrix_.value_ = np.ascontiguousarray(a.data, dtype=np.float64)
     return lp
+
+
+# ---------------------------------------------------------------------------- one run
+#: HiGHS' model statuses in lpbounds' vocabulary (before the certificate has its say).
+STATUS_MAP: dict[str, Status] = {
+    "kOptimal": Status.OPTIMAL,
+    "kTimeLimit": Status.TIME_LIMIT,
+    "kIterationLimit": Status.ITERATION_LIMIT,
+    "kObjectiveBound": Status.LIMIT,
+    "kObjectiveTarget": Status.LIMIT,
+    "kSolutionLimit": Status.LIMIT,
+    "kInterrupt": Status.LIMIT,
+    "kHighsInterrupt": Status.LIMIT,
+    "kUnknown": Status.INACCURATE,
+    "kInfeasible": Status.INFEASIBLE,
+    "kUnboundedOrInfeasible": Status.INFEASIBLE,
+    "kUnbounded": Status.UNBOUNDED,
+}
+
+
+@dataclass
+class HighsRun:
+    """What one ``Highs.run()`` returned.
+
+    ``status`` maps HiGHS' model status (``model_status``, its name) through
+    :data:`STATUS_MAP` (anything else: SOLVER_ERROR); ``x`` and ``y`` (row duals, ``>= 0``
+    on ``>=`` rows of a minimisation) are ``None`` when HiGHS has no valid primal
+    solution (a limit hit before the first iterate, an error).
+    """
+
+    status: Status
+    model_status: str
+    x: np.ndarray | None
+    y: np.ndarray | None
+    iterations: int
+    seconds: float
+
+
+def set_options(h: Any, options: dict[str, Any], verbose: bool) -> None:
+    """Pass ``options`` to HiGHS by name (``highs_options={...}`` unpacked, as cvxpy does).
+
+    Raises
+    ------
+    ValidationError
+        Naming the option HiGHS rejects (unknown name or a value of the wrong type or range).
+    """
+    opts = dict(options)
+    opts.update(opts.pop("highs_options", None) or {})
+    h.setOptionValue("output_flag", bool(verbose))
+    for key, value in opts.items():
+        ok = _option_ok(h, key, value)
+        if not ok:
+            raise ValidationError(
+                f"HiGHS rejected the option {key}={value!r} (unknown name, or a value of "
+                "the wrong type or range; HiGHS' options: https://ergo-code.github.io/HiGHS/"
+                "dev/options/definitions/)"
+            )
+
+
+def _option_ok(h: Any, key: str, value: Any) -> bool:
+    import highspy
+
+    if isinstance(value, (bool, np.bool_)):
+        value = bool(value)
+    elif isinstance(value, (np.integer,)):
+        value = int(value)
+    elif isinstance(value, (np.floating,)):
+        value = float(value)
+    try:
+        return bool(h.setOptionValue(str(key), value) != highspy.HighsStatus.kError)
+    except (TypeError, ValueError):
+        return False
+
+
+def run_highs(h: Any) -> HighsRun:
+    """Run the model passed to ``h`` and read back its status, point and duals."""
+    t0 = time.perf_counter()
+    h.run()
+    seconds = time.perf_counter() - t0
+    name = h.getModelStatus().name
+    sol = h.getSolution()
+    info = h.getInfo()
+    iters = sum(
+        max(0, int(getattr(info, k)))
+        for k in (
+            "simplex_iteration_count", "ipm_iteration_count", "crossover_iteration_count",
+            "pdlp_iteration_count",
+        )
+    )  # fmt: skip
+    has_x = bool(sol.value_valid)
+    x = np.array(sol.col_value, dtype=np.float64) if has_x else None
+    y = np.array(sol.row_dual, dtype=np.float64) if has_x and sol.dual_valid else None
+    return HighsRun(STATUS_MAP.get(name, Status.SOLVER_ERROR), name, x, y, iters, seconds)
+
+
+def tight_basis(n_rows: int, n_cols: int, tight_rows: np.ndarray) -> Any:
+    """The basis of a policy: every column basic, ``tight_rows`` at their lower bound.
+
+    For a row system with one tight row per variable (the rows a policy picks), the
+    other rows' slacks are basic: ``n_cols + (n_rows - len(tight_rows)) = n_rows`` basic
+    variables, and the basis matrix is ``I - lambda P_pi`` on the tight rows (nonsingular
+    for ``lambda < 1``). Its primal solution is the policy's value, its dual solution the
+    policy's discounted occupation measure ``(I - lambda P_pi)^{-T} c``; for an optimal
+    policy both are feasible, so the simplex method stops at once (see
+    :meth:`lpbounds.formulations.RowsLP.solve`, ``warm_start="policy"``).
+    """
+    import highspy
+
+    k = highspy.HighsBasisStatus
+    tight = np.asarray(tight_rows, dtype=np.int64)
+    if tight.shape != (n_cols,):
+        raise ValidationError(
+            f"a basis needs one tight row per variable ({n_cols}); got {tight.shape}"
+        )
+    code = np.zeros(n_rows, dtype=np.int8)
+    code[tight] = 1
+    if int(code.sum()) != n_cols:
+        raise ValidationError("the tight rows of a basis must be distinct")
+    pick = np.array([k.kBasic, k.kLower], dtype=object)
+    basis = highspy.HighsBasis()
+    basis.col_status = list(np.full(n_cols, k.kBasic, dtype=object))
+    basis.row_status = list(pick[code])
+    basis.valid = True
+    return basis
+
+
+# ---------------------------------------------------------------------------- cvxpy adapter
+class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
+    """cvxpy's HiGHS interface, passing the inequality rows as ``>=`` rows.
+
+    cvxpy's cone form is ``A_d x <= b_d`` (``A x >= b`` becomes ``-A x <= -b``), and its
+    HiGHS interface hands HiGHS exactly that: rows ``-inf <= -A x <= -b``. The LP is the
+    same, but HiGHS' interior point method (IPX) is not symmetric in the row sense: on the
+    patrol UBLP it takes 42 iterations on the ``<=`` rows and 30 on ``A x >= b`` (LBLP,
+    RLP and ELP alike), which was most of "the cvxpy tax". This adapter writes the rows as
+    ``-A_d x >= -b_d`` (``A x >= b`` again, equality rows unchanged) and maps the row
+    duals back to cvxpy's sign, so ``constraint.dual_value`` is as with ``solver="HIGHS"``.
+    LP only (no integer variables); :meth:`model_status` keeps HiGHS' own status, which
+    cvxpy folds into ``USER_LIMIT`` for every limit.
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.model_status: str = "kNotset"
+
+    def name(self) -> str:
+        return "HIGHS_ROWS"
+
+    def solve_via_data(
+        self,
+        data: dict[str, Any],
+        warm_start: bool,
+        verbose: bool,
+        solver_opts: dict[str, Any],
+        solver_cache: Any = None,
+    ) -> dict[str, Any]:
+        import cvxpy.settings as s
+        from cvxpy.error import SolverError as CvxpySolverError
+        from cvxpy.reductions.solvers.conic_solvers.conic_solver import dims_to_solver_dict
+
+        if data.get(s.BOOL_IDX) or data.get(s.INT_IDX):
+            raise CvxpySolverError("HIGHS_ROWS solves LPs only")
+        n_eq = int(dims_to_solver_dict(data[s.DIMS])[s.EQ_DIM])
+        b = np.asarray(data[s.B], dtype=np.float64)
+        lp = highs_lp(-data[s.A], -b, data[s.C])
+        if n_eq:
+            upper = np.array(lp.row_upper_)
+            upper[:n_eq] = -b[:n_eq]
+            lp.row_upper_ = upper
+        if data.get(s.LOWER_BOUNDS) is not None:
+            lp.col_lower_ = np.asarray(data[s.LOWER_BOUNDS], dtype=np.float64)
+        if data.get(s.UPPER_BOUNDS) is not None:
+            lp.col_upper_ = np.asarray(data[s.UPPER_BOUNDS], dtype=np.float64)
+        h = quiet_highs()
+        opts = dict(solver_opts)
+        opts.update(opts.pop("highs_options", None) or {})
+        for key, value in opts.items():
+            if not _option_ok(h, key, value):
+                raise ValueError(f"HIGHS rejected the option {key}={value!r}")
+        h.setOptionValue("output_flag", bool(verbose))
+        h.passModel(lp)
+        h.run()
+        sol = h.getSolution()
+        self.model_status = h.getModelStatus().name
+        results: dict[str, Any] = {
+            # cvxpy's invert negates row_dual (its <= rows); ours are >= rows
+            "solution": SimpleNamespace(
+                col_value=sol.col_value, row_dual=-np.asarray(sol.row_dual, dtype=np.float64)
+            ),
+            "info": h.getInfo(),
+            "model_status": self.model_status,
+            "run_time": h.getRunTime(),
+        }
+        if self.model_status == "kInfeasible":
+            st, has_ray, ray = h.getDualRay()
+            results["dual_ray"] = (st, has_ray, -np.asarray(ray, dtype=np.float64))
+        return results

@@ -16,6 +16,7 @@ import numpy as np
 from ..certificate import Certificate, certify
 from ..dp import solve_exact
 from ..rows import BellmanRows
+from ._highs import tight_basis
 from .base import Formulation, check_cost
 
 __all__ = ["RowsLP"]
@@ -67,6 +68,27 @@ class RowsLP(Formulation):
     def _certify(self, x: np.ndarray) -> Certificate:
         """The bracket on the exact optimum (the least feasible point) from ``x`` alone."""
         return certify(self.rows, x)
+
+    def policy_basis(self) -> Any:
+        """HiGHS' basis of the optimal policy, from exact DP (``solve(warm_start="policy")``).
+
+        :func:`~lpbounds.solve_exact` on :attr:`rows` gives the fixed point and, per
+        variable, a maximising row (``policy_rows``). In the basis every column is basic,
+        those rows are at their lower bound (tight) and every other row's slack is basic:
+        the basis matrix is ``I - lambda P_pi`` over the tight rows, its primal solution
+        the policy's value and its dual solution ``y = (I - lambda P_pi)^{-T} c >= 0`` on
+        the tight rows (0 elsewhere), the policy's discounted occupation measure. For an
+        optimal policy both are feasible, so HiGHS' simplex method stops after factorising
+        the basis and checking it (0 iterations; a few when DP's policy is optimal only to
+        its tolerance). What the result then proves: the point's bracket
+        ``lower_values <= v* <= upper_values`` from :func:`lpbounds.certify`, as for any
+        solve; and, from the returned duals, ``dual_residual = ||A'y - c||_inf`` and
+        ``gap = |c'x - b'y|`` computed by lpbounds (``y >= 0`` is dual feasible up to
+        ``dual_residual``, so ``b'y`` is a lower bound on the optimum up to it:
+        ``objective_bracket`` uses it).
+        """
+        dp = solve_exact(self.rows)
+        return tight_basis(self.A.shape[0], self.A.shape[1], dp.policy_rows)
 
     def fixed_point(self, tol: float | None = None) -> np.ndarray:
         """The exact optimum, solver-free: the fixed point of ``max`` over the rows (Fact 1)."""
