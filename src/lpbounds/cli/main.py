@@ -19,7 +19,7 @@ from ..errors import LPBoundsError, OutputError, SolverNotInstalledError, Valida
 from ._common import add_verbosity_options, configure_output
 
 #: Subcommand modules, in the order ``lpbounds --help`` lists them.
-COMMANDS: tuple[str, ...] = ("solve", "verify", "bounds", "reproduce", "compare")
+COMMANDS: tuple[str, ...] = ("solve", "verify", "bounds", "reproduce", "compare", "export", "score")
 
 EXIT_OK = 0
 #: A computation failed: a solver error, no convergence, two results that disagree.
