@@ -240,6 +240,13 @@ def test_bad_export_arguments_exit_2_and_write_nothing(tmp_path, capsys, args, f
     assert not out.exists()
 
 
+def test_a_patrol_mdp_too_large_to_enumerate_is_refused_before_building(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["export", "patrol-m8", "--formulation", "ELP", "--out", str(out)]) == 2
+    one_line_error(capsys, "41,665,015,288 states", "UBLP and LBLP")
+    assert not out.exists()
+
+
 def test_out_dir_with_foreign_files_is_refused_and_an_export_is_replaced(tmp_path, capsys):
     out = tmp_path / "o"
     out.mkdir()
