@@ -475,6 +475,7 @@ class CvxpyBackend(Backend):
             compile_seconds=compile_s,
             solve_seconds=solve_s if solve_s else time.perf_counter() - t0 - compile_s,
             iterations=(int(stats.num_iters) if stats and stats.num_iters is not None else None),
+            extra={} if adapter is None else {"highs_status": adapter.model_status},
         )
 
 
@@ -520,6 +521,7 @@ class HighspyBackend(Backend):
             compile_seconds=compile_s,
             solve_seconds=hr.seconds,
             iterations=hr.iterations,
+            extra={"highs_status": hr.model_status},
         )
 
 

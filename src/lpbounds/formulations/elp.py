@@ -45,6 +45,21 @@ class ELP(RowsLP):
     ``values`` and ``state_values`` of the result are ``V`` per state; ``mu`` holds the
     duals per (state, action) (the discounted state-action frequencies when ``c`` is
     an initial distribution).
+
+    **At the paper's size** (``models/patrol-paper.toml``: 2,048,000 variables, 4.65M rows)
+    HiGHS' interior point method does not finish within 10 minutes. The route that does,
+    in under a minute and about 5 GB on two cores (docs/benchmarks.md, "ELP of the paper's
+    instance")::
+
+        ELP(mdp).solve(backend="highspy", warm_start="policy")
+
+    exact DP (:func:`lpbounds.solve_exact`) gives the optimal policy, and HiGHS' simplex
+    method starts from its basis (:meth:`~lpbounds.formulations.RowsLP.policy_basis`) and
+    confirms it in 0 iterations. What the result proves: ``lower_values <= V* <=
+    upper_values`` from the certificate of the returned point (as for every solve); the
+    duals are the policy's occupation measure, dual feasible up to ``dual_residual`` and
+    with the ``gap`` lpbounds recomputes; the status comes from the certificate, not from
+    HiGHS.
     """
 
     name = "ELP"
