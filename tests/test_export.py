@@ -125,6 +125,18 @@ def test_partition_option_replaces_the_partition(tmp_path):
     assert np.abs(np.load(out / "optimum.npy") - v).max() <= 1e-10 * np.abs(v).max()
 
 
+def test_partition_from_a_labels_file(tmp_path, capsys):
+    labels = np.arange(40) % 4
+    np.save(tmp_path / "labels.npy", labels)
+    out = export(tmp_path, GARNET, "SLP", "--partition", str(tmp_path / "labels.npy"))
+    assert np.array_equal(np.load(out / "rows.npz")["partition_labels"], labels)
+    assert json.loads((out / "lp.json").read_text())["sizes"]["columns"] == 4
+    np.save(tmp_path / "bad.npy", labels - 1)  # label -1 at state 0
+    bad = ["--partition", str(tmp_path / "bad.npy"), "--out", str(tmp_path / "o")]
+    assert main(["export", GARNET, "--formulation", "RLP", *bad]) == 2
+    one_line_error(capsys, "--partition", "labels[0] = -1 is negative")
+
+
 # ---------------------------------------------------------------------- score
 def parse_highs_columns(path: Path) -> np.ndarray:
     """The primal columns of a HiGHS raw solution file, read by the simplest loop."""
@@ -229,7 +241,8 @@ def one_line_error(capsys, *fragments: str) -> str:
         (["--formulation", "RLP", "--format", "csv"], ["--format 'csv'"]),
         (["--formulation", "ELP", "--partition", "random:3"], ["ELP uses no partition"]),
         (["--formulation", "RLP", "--partition", "random:x"], ["random:M[:SEED]"]),
-        (["--formulation", "RLP", "--partition", "random:99"], ["n_partitions"]),
+        (["--formulation", "RLP", "--partition", "random:99"], ["--partition", "n_partitions"]),
+        (["--formulation", "IB", "--partition", "nope.npy"], ["--partition 'nope.npy'"]),
         (["--formulation", "UBLP"], ["patrol instances only"]),
     ],
 )

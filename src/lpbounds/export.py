@@ -105,7 +105,16 @@ def check_formulation(name: Any) -> str:
 
 def _partition_from_spec(spec: str, n_states: int) -> Any:
     """``random:M[:SEED]`` (:func:`lpbounds.generators.random_partition`) or a ``.npy``
-    file of one partition label per state."""
+    file of one partition label per state; every error names ``--partition``."""
+    try:
+        return _build_partition(spec, n_states)
+    except ValidationError as exc:
+        if str(exc).startswith("--partition"):
+            raise
+        raise ValidationError(f"--partition {spec!r}: {exc}") from exc
+
+
+def _build_partition(spec: str, n_states: int) -> Any:
     from .generators import random_partition
     from .partition import Partition
 
