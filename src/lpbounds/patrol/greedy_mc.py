@@ -64,7 +64,7 @@ from ..validation import check_int, check_real, check_vector
 from .bounds import patrol_rows
 from .model import ACTION_NAMES, PatrolModel, _decode_kernel, _successor_kernel
 from .params import PatrolParams
-from .partitions import block_sizes, state_partition_kernel
+from .partitions import alert_key_kernel, block_sizes, key_index_kernel
 from .simulation import SimulationResult, alert_sequence, pooled_statistics, simulate
 from .summary import PolicyStatistics
 
@@ -174,52 +174,68 @@ class _Kernel:
 
 @njit(cache=True, nogil=True)
 def _buffers(m):  # pragma: no cover - compiled
-    """Per-trajectory work arrays: the state ``cur`` (l, w, d) and ``tau`` (1, m), and per
-    action the successor indices ``succ[a, 0]`` and their components."""
+    """Per-trajectory work arrays: the state ``cur`` (l, w, d) and ``tau`` (1, m); per
+    action ``a`` the successor indices ``succ[a, 0]`` (by outcome), the components of the
+    no-alert successor ``nl[a], nw[a], nd[a], ntau[a, 0]``, and the Q-values ``q``."""
     cur = np.zeros(3, np.int64)
     tau = np.zeros((1, m), np.int16)
     succ = np.zeros((3, 1, m + 1), np.int64)
-    nl = np.zeros((3, m + 1), np.int64)
-    nw = np.zeros((3, m + 1), np.int64)
-    nd = np.zeros((3, m + 1), np.int64)
-    ntau = np.zeros((3, m + 1, m), np.int16)
-    return cur, tau, succ, nl, nw, nd, ntau
+    nl = np.zeros(3, np.int64)
+    nw = np.zeros(3, np.int64)
+    nd = np.zeros(3, np.int64)
+    ntau = np.zeros((3, 1, m), np.int16)
+    q = np.zeros(3)
+    return cur, tau, succ, nl, nw, nd, ntau, q
+
+
+@njit(cache=True, nogil=True)
+def _decode_one(x, a, mt, buf):  # pragma: no cover - compiled
+    """Decode state ``x`` into action ``a``'s successor slots (the model's decoder); it
+    becomes ``succ[a, 0, 0]``."""
+    cfg, stations = mt[0], mt[2]
+    _, tau, succ, nl, nw, nd, ntau, _ = buf
+    succ[a, 0, 0] = x
+    _decode_kernel(
+        succ[a, 0, :1], cfg[4], cfg[3], tau.shape[1], cfg[1], stations, nl[a : a + 1],
+        nw[a : a + 1], nd[a : a + 1], ntau[a],
+    )  # fmt: skip
 
 
 @njit(cache=True, nogil=True)
 def _set_state(x, mt, buf):  # pragma: no cover - compiled
-    """Decode state ``x`` into the current state of ``buf`` (action 0's slots as scratch)."""
-    cfg, stations = mt[0], mt[2]
-    cur, tau, _succ, nl, nw, nd, ntau = buf
-    xs = np.empty(1, np.int64)
-    xs[0] = x
-    m = tau.shape[1]
-    _decode_kernel(
-        xs, cfg[4], cfg[3], m, cfg[1], stations, nl[0, :1], nw[0, :1], nd[0, :1], ntau[0, :1]
-    )
-    cur[0], cur[1], cur[2] = nl[0, 0], nw[0, 0], nd[0, 0]
-    tau[0, :] = ntau[0, 0, :]
+    """Make state ``x`` the current state of ``buf`` (action 0's slots as scratch)."""
+    _decode_one(x, 0, mt, buf)
+    _advance(0, -1, buf)
 
 
 @njit(cache=True, nogil=True)
 def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
     """``lambda sum_l p_l lower[i(f(x, a, Y_l))]`` summed in outcome order, as
-    :func:`lpbounds.dp.greedy_policy` sums it; fills the action's successor slots."""
-    cfg, station_pos, stations, w_travel, w_loiter, probs = mt[0], mt[1], mt[2], mt[3], mt[4], mt[5]
-    cur, tau, succ, nl, nw, nd, ntau = buf
+    :func:`lpbounds.dp.greedy_policy` sums it; fills the action's successor slots.
+
+    Only the no-alert successor is decoded: by the model's encoding
+    (``_successor_kernel``), the successor under outcome ``y >= 1`` has another index
+    exactly when the alert at station ``y - 1`` is new (``tau' = 1``, so ``A' = 1`` and
+    ``taubar' = max(taubar, 1)``), and is the no-alert successor otherwise.
+    """
+    cfg, station_pos, w_travel, w_loiter, probs = mt[0], mt[1], mt[3], mt[4], mt[5]
+    cur, tau, succ, nl, nw, nd, ntau, _ = buf
     m = tau.shape[1]
     n_nodes, big_d, gamma, radix, n_travel = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     _successor_kernel(
         cur[0:1], cur[1:2], cur[2:3], tau, a, n_nodes, big_d, gamma, radix, n_travel,
         station_pos, w_travel, w_loiter, succ[a],
     )  # fmt: skip
-    _decode_kernel(succ[a, 0], n_travel, radix, m, big_d, stations, nl[a], nw[a], nd[a], ntau[a])
+    _decode_one(succ[a, 0, 0], a, mt, buf)
+    acode, tb = alert_key_kernel(ntau[a, 0])
     acc = 0.0
     for y in range(m + 1):
-        part = state_partition_kernel(
-            nl[a, y], nw[a, y], nd[a, y], ntau[a, y], station_pos, n_nodes, big_d, gamma,
-            cfg[5], cfg[6],
-        )  # fmt: skip
+        ay, tby = acode, tb
+        if y > 0 and succ[a, 0, y] != succ[a, 0, 0]:
+            ay, tby = acode | (1 << (m - y)), max(tb, 1)
+        part = key_index_kernel(
+            nl[a], nw[a], nd[a], ay, tby, station_pos, n_nodes, big_d, gamma, cfg[5], cfg[6], m
+        )
         acc += probs[y] * lower[part]
     return mt[8] * acc
 
@@ -232,14 +248,12 @@ def _greedy_step(lower, mt, buf):  # pragma: no cover - compiled
     cur, tau = buf[0], buf[1]
     l, d, big_d, gamma = cur[0], cur[2], cfg[1], cfg[2]
     k = station_pos[l]
-    tbar = 0
-    for j in range(tau.shape[1]):
-        tbar = max(tbar, tau[0, j])
+    tbar = alert_key_kernel(tau[0])[1]
     pen = -rho * float(min(tbar, gamma))
     n_act = 2
     if k >= 0 and d < big_d and (d >= 1 or tau[0, k] > 0 or cfg[7] != 0):
         n_act = 3
-    q = np.empty(3)
+    q = buf[7]
     best = -np.inf
     for a in range(n_act):
         r = pen + inc[d] if a == 2 else pen
@@ -255,10 +269,15 @@ def _greedy_step(lower, mt, buf):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def _advance(a, y, buf):  # pragma: no cover - compiled
-    """Move to the successor of action ``a`` under outcome ``y``; return its index."""
-    cur, tau, succ, nl, nw, nd, ntau = buf
-    cur[0], cur[1], cur[2] = nl[a, y], nw[a, y], nd[a, y]
-    tau[0, :] = ntau[a, y, :]
+    """Move to the successor of action ``a`` under outcome ``y`` (``y = -1``: the decoded
+    state itself); return its index."""
+    cur, tau, succ, nl, nw, nd, ntau, _ = buf
+    cur[0], cur[1], cur[2] = nl[a], nw[a], nd[a]
+    tau[0, :] = ntau[a, 0, :]
+    if y < 0:
+        return -1
+    if y > 0 and succ[a, 0, y] != succ[a, 0, 0]:
+        tau[0, y - 1] = 1
     return succ[a, 0, y]
 
 

@@ -27,8 +27,10 @@ from ..errors import ValidationError
 from .params import PatrolParams
 
 __all__ = [
+    "alert_key_kernel",
     "block_sizes",
     "decode_partition",
+    "key_index_kernel",
     "partition_components",
     "partition_index",
     "state_partition_kernel",
@@ -94,22 +96,12 @@ def partition_index(
 
 
 @njit(cache=True, nogil=True)
-def state_partition_kernel(
-    l, w, d, tau, station_pos, n_nodes, big_d, gamma, tb_size, lb_size
+def key_index_kernel(
+    l, w, d, acode, tb, station_pos, n_nodes, big_d, gamma, tb_size, lb_size, m
 ):  # pragma: no cover - compiled
-    """:func:`partition_index` of one state given by its components, compiled (scalar).
-
-    ``tau`` is the state's delay vector (length m); ``tb_size, lb_size`` are
-    :func:`block_sizes`. For the matrix-free kernels that act states out one at a time;
-    tested equal to :func:`partition_index` on every state of small instances.
-    """
-    m = tau.shape[0]
-    acode = 0
-    tb = 0
-    for j in range(m):
-        acode = 2 * acode + (1 if tau[j] > 0 else 0)
-        if tau[j] > tb:
-            tb = tau[j]
+    """:func:`partition_index` of one key, compiled (scalar): ``acode`` is the alert
+    pattern ``A`` as a binary number (``A_1`` the most significant of ``m`` bits),
+    ``tb`` the maximum delay; ``tb_size, lb_size`` are :func:`block_sizes`."""
     if d == 0:
         within = 0 if acode == 0 else 1 + (acode - 1) * gamma + (tb - 1)
         return (2 * l + (1 if w < 0 else 0)) * tb_size + within
@@ -119,6 +111,33 @@ def state_partition_kernel(
     acode_l = (high << (m - 1 - k)) | low
     within = 0 if acode_l == 0 else 1 + (acode_l - 1) * gamma + (tb - 1)
     return 2 * n_nodes * tb_size + (k * big_d + d - 1) * lb_size + within
+
+
+@njit(cache=True, nogil=True)
+def alert_key_kernel(tau):  # pragma: no cover - compiled
+    """``(acode, taubar)`` of one delay vector: the key's alert pattern and maximum delay."""
+    acode = 0
+    tb = 0
+    for j in range(tau.shape[0]):
+        acode = 2 * acode + (1 if tau[j] > 0 else 0)
+        tb = max(tb, tau[j])
+    return acode, tb
+
+
+@njit(cache=True, nogil=True)
+def state_partition_kernel(
+    l, w, d, tau, station_pos, n_nodes, big_d, gamma, tb_size, lb_size
+):  # pragma: no cover - compiled
+    """:func:`partition_index` of one state given by its components, compiled (scalar).
+
+    ``tau`` is the state's delay vector (length m). For the matrix-free kernels that act
+    states out one at a time; tested equal to :func:`partition_index` on every state of
+    small instances (tests/patrol/test_greedy_mc.py).
+    """
+    acode, tb = alert_key_kernel(tau)
+    return key_index_kernel(
+        l, w, d, acode, tb, station_pos, n_nodes, big_d, gamma, tb_size, lb_size, tau.shape[0]
+    )
 
 
 def _check_keys(

@@ -1,0 +1,178 @@
+"""pi_s beyond exact DP (issue 16, part 2): Monte Carlo value and Table 1 at 6 and 8 stations.
+
+For each model, in a fresh process: the partition bounds (LBLP ``w*``, UBLP ``v*``, fixed
+points with certified errors), the Monte Carlo value of ``pi_s`` (greedy for ``w*``,
+acted out on the fly) from :func:`lpbounds.patrol.greedy_mc.default_starts` (the ``m``
+empty stations and 12 seeded random states; 10,000 paths each, horizon with truncation
+error <= 1e-6, Student's t 95 %), and Table 1 (5 seeds x 60,000 steps, as at 4
+stations), with wall times and the process's peak RSS. Then the compiled Monte Carlo's
+thread scaling at 8 stations: 2 threads against 1, alternating, same work.
+
+Writes the ``greedy-mc`` section of docs/benchmarks.md and benchmarks/results/greedy_mc.json.
+
+    python benchmarks/bench_greedy_mc.py [--paths 10000] [--models M6 M8] [--reps 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import time
+from pathlib import Path
+
+from _common import machine, run_isolated, today, write_section
+
+HERE = Path(__file__).resolve().parent
+M6_PAPER = HERE.parent / "src" / "lpbounds" / "models" / "patrol-m6-paper.toml"
+M6 = str(M6_PAPER) if M6_PAPER.exists() else "patrol-m6"
+RESULTS = HERE / "results" / "greedy_mc.json"
+
+RUN = """
+import json, time
+import numpy as np
+from lpbounds.instances import load_instance
+from lpbounds.patrol.instance import params_from_instance
+from lpbounds.patrol import greedy_mc as g
+from lpbounds.patrol import PatrolParams
+small = PatrolParams(N=6, stations=(0, 3), D=2, Gamma=4)  # compile on a small model first
+t = time.perf_counter()
+b0 = g.partition_bounds(small)
+g.greedy_value_mc(small, b0.lower, b0.upper, starts=3, paths=10, horizon=5)
+g.greedy_table1(small, b0.lower, steps=100, seeds=[1])
+compile_s = time.perf_counter() - t
+params = params_from_instance(load_instance({model!r}))
+b = g.partition_bounds(params)
+est = g.greedy_value_mc(params, b.lower, b.upper, paths={paths}, upper_error=b.upper_error)
+t = time.perf_counter()
+tab = g.greedy_table1(params, b.lower)
+tab_s = time.perf_counter() - t
+s = tab.statistics
+print(json.dumps({{
+    "model": {model!r}, "n_states": params.n_states, "n_partitions": params.n_partitions,
+    "m": params.m, "compile_s": compile_s, "bounds_s": b.seconds,
+    "lower_error": b.lower_error, "upper_error": b.upper_error,
+    "mc_s": est.seconds, "paths": est.paths, "horizon": est.horizon,
+    "truncation": est.truncation, "rows": est.rows(),
+    "table1_s": tab_s, "visited_states": tab.visited_states,
+    "table1": {{k: getattr(s, k) for k in ("mean_loiters", "mean_delay", "worst_delay",
+        "mean_delay_plus_one", "worst_delay_plus_one", "mean_delay_capped",
+        "n_serviced", "n_arrivals", "std_mean_delay", "std_mean_loiters", "mismatches")}},
+}}))
+"""
+
+THREADS = """
+import json, time
+import numba
+import numpy as np
+from lpbounds.instances import load_instance
+from lpbounds.patrol.instance import params_from_instance
+from lpbounds.patrol import greedy_mc as g
+params = params_from_instance(load_instance("patrol-m8"))
+b = g.partition_bounds(params)
+g.greedy_value_mc(params, b.lower, b.upper, starts=8, paths=10, horizon=5)  # compile
+out = {{"1": [], "2": []}}
+for rep in range({reps}):
+    for nt in (2, 1):
+        numba.set_num_threads(nt)
+        est = g.greedy_value_mc(params, b.lower, b.upper, starts=8, paths={paths})
+        out[str(nt)].append(est.seconds)
+print(json.dumps({{"seconds": out, "steps": 8 * {paths} * est.horizon}}))
+"""
+
+
+def _fmt_table(runs: list[dict]) -> str:
+    lines = [
+        "| model | m | states | bounds (s) | MC: starts x paths x H | MC (s) | us/step (wall) "
+        "| Table 1: 5 x 60,000 steps (s) | peak RSS (MB) |",
+        "|---|---:|---:|---:|---|---:|---:|---:|---:|",
+    ]
+    for r in runs:
+        n_st = len(r["rows"])
+        steps = n_st * r["paths"] * r["horizon"]
+        lines.append(
+            f"| {Path(r['model']).stem} | {r['m']} | {r['n_states']:,} | {r['bounds_s']:.1f} "
+            f"| {n_st} x {r['paths']:,} x {r['horizon']} | {r['mc_s']:.1f} "
+            f"| {1e6 * r['mc_s'] / steps:.2f} | {r['table1_s']:.1f} | {r['peak_rss_mb']:.0f} |"
+        )
+    return "\n".join(lines)
+
+
+def _fmt_certificate(r: dict) -> str:
+    m = r["m"]
+    lines = [
+        f"**{Path(r['model']).stem}** ({r['n_states']:,} states): V_pis by Monte Carlo "
+        f"({r['paths']:,} paths, horizon {r['horizon']}, truncation <= {r['truncation']:.1e}, "
+        "Student's t 95 %) beside the certified bounds; "
+        "gap bound = v* + err(v*) - (V_hat - half-width - truncation) >= V* - V_pis at 95 %.",
+        "",
+        "| start | state | w*(x) | V_hat(x) +- half-width | v*(x) | v* - w* | gap bound |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for i, row in enumerate(r["rows"]):
+        kind = f"empty, at station {i + 1}" if i < m else "random"
+        lines.append(
+            f"| {kind} | {row['state']} | {row['lower']:.5f} | {row['mean']:.5f} +- "
+            f"{row['half_width']:.5f} | {row['upper']:.5f} | {row['upper'] - row['lower']:.5f} "
+            f"| {row['gap_bound']:.5f} |"
+        )
+    return "\n".join(lines)
+
+
+def _fmt_table1(runs: list[dict]) -> str:
+    lines = [
+        "| model | mean loiters | mean delay (to end of first loiter) | worst delay (+1) "
+        "| serviced alerts | visited states |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    for r in runs:
+        t = r["table1"]
+        lines.append(
+            f"| {Path(r['model']).stem} | {t['mean_loiters']:.2f} | {t['mean_delay']:.2f} "
+            f"({t['mean_delay_plus_one']:.2f}) | {t['worst_delay']} ({t['worst_delay_plus_one']}) "
+            f"| {t['n_serviced']:,} | {r['visited_states']:,} |"
+        )
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--paths", type=int, default=10_000)
+    ap.add_argument("--models", nargs="*", default=[M6, "patrol-m8"])
+    ap.add_argument("--reps", type=int, default=3, help="repetitions of the thread comparison")
+    ap.add_argument("--thread-paths", type=int, default=2_000)
+    args = ap.parse_args()
+    load0 = os.getloadavg()
+    t0 = time.time()
+    runs = [run_isolated(RUN.format(model=m, paths=args.paths), timeout=3600) for m in args.models]
+    thr = run_isolated(THREADS.format(reps=args.reps, paths=args.thread_paths), timeout=3600)
+    load1 = os.getloadavg()
+    t1, t2 = statistics.median(thr["seconds"]["1"]), statistics.median(thr["seconds"]["2"])
+    meta = {"machine": machine(), "date": today(), "load_before": load0, "load_after": load1}
+    RESULTS.parent.mkdir(exist_ok=True)
+    RESULTS.write_text(json.dumps({"meta": meta, "runs": runs, "threads": thr}, indent=1) + "\n")
+    body = "\n\n".join(
+        [
+            "## pi_s beyond exact DP: Monte Carlo value and Table 1 "
+            "(benchmarks/bench_greedy_mc.py)",
+            f"{meta['machine']}; {meta['date']}; load average {load0[0]:.1f} before, "
+            f"{load1[0]:.1f} after; total {time.time() - t0:.0f} s. Each model in a fresh "
+            "process; compiled kernels (numba, prange over paths), first compile excluded "
+            "(done on a small model first).",
+            _fmt_table(runs),
+            f"Thread scaling at 8 stations (8 starts x {args.thread_paths:,} paths, "
+            f"{thr['steps']:,} steps, alternating, median of {args.reps}): 1 thread "
+            f"{t1:.2f} s, 2 threads {t2:.2f} s, ratio {t1 / t2:.2f}.",
+            "Table 1 of pi_s (5 seeds x 60,000 steps; the 4-station conventions: delay to the "
+            "first loiter, uncapped; in brackets counted to the end of the first loiter):",
+            _fmt_table1(runs),
+            *[_fmt_certificate(r) for r in runs],
+        ]
+    )
+    write_section("greedy-mc", body)
+    print(body)
+
+
+if __name__ == "__main__":
+    main()
