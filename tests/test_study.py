@@ -51,7 +51,9 @@ def _loop_lp(mdp: lb.FiniteMDP, labels: np.ndarray | None) -> tuple[float, np.nd
 
 @pytest.fixture(scope="module")
 def study() -> lb.study.StudyResult:
-    return run_study([SPEC], ["ELP", "RLP"], ["HIGHS:simplex", "HIGHS:ipm", "CLARABEL"], jobs=1)
+    return run_study(
+        [SPEC], ["ELP", "RLP"], ["HIGHS:simplex", "HIGHS:ipm", "CLARABEL:default"], jobs=1
+    )
 
 
 def test_study_matches_independent_lp(study):
@@ -85,7 +87,9 @@ def test_study_matches_independent_lp(study):
 
 
 def test_parallel_processes_equal_serial(study):
-    par = run_study([SPEC], ["ELP", "RLP"], ["HIGHS:simplex", "HIGHS:ipm", "CLARABEL"], jobs=2)
+    par = run_study(
+        [SPEC], ["ELP", "RLP"], ["HIGHS:simplex", "HIGHS:ipm", "CLARABEL:default"], jobs=2
+    )
     key = ["formulation", "config"]
     a = study.frame.set_index(key)["objective"].sort_index()
     b = par.frame.set_index(key)["objective"].sort_index()
@@ -184,21 +188,48 @@ def test_repeat_must_be_positive():
 
 
 def test_cli_writes_csv_and_plot(tmp_path):
+    import json
+    from importlib.metadata import version
+
     import pandas as pd
 
     out = tmp_path / "cmp"
     argv = ["compare", "garnet:40:5:1", "garnet:80:9:2", "--formulations", "RLP"]
-    argv += ["--solvers", "HIGHS:ipm", "CLARABEL", "--repeat", "2", "--jobs", "1"]
+    argv += ["--solvers", "HIGHS:ipm", "CLARABEL:default", "--repeat", "2", "--jobs", "1"]
+    argv += ["--shift", "10", "0.5", "--time-limit", "60"]
     assert main([*argv, "--out", str(out)]) == 0
     frame = pd.read_csv(out / "study.csv")
     assert len(frame) == 2 * 2 * 2, "2 instances x 2 solvers x 2 repeats"
     assert sorted(frame["repeat"].unique()) == [0, 1]
     assert set(frame["status"]) == {"optimal"}
     assert frame["accurate"].all() and (frame["certified_error"] > 0).all()
+    assert (frame["time_limit"] == 60).all()
     summary = pd.read_csv(out / "summary.csv")
     assert len(summary) == 4 and (summary["repeats"] == 2).all()
-    png = (out / "study.png").read_bytes()
-    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
+    solvers = pd.read_csv(out / "solvers.csv").set_index("config")
+    assert sorted(solvers.index) == ["CLARABEL", "HIGHS:ipm"]
+    assert (solvers["solved"] == 2).all() and (solvers["problems"] == 2).all()
+    assert (solvers[["inaccurate", "time_limit", "other_limit", "failed"]] == 0).all().all()
+    # every problem solved: the mean is over the median solve times of the two problems
+    for cfg, grp in frame.groupby("config"):
+        t = grp.groupby("instance")["solve_seconds"].median().to_numpy()
+        expected = np.sqrt((t[0] + 0.5) * (t[1] + 0.5)) - 0.5  # two values, shift 0.5
+        assert solvers.loc[cfg, "sgm_0.5s"] == pytest.approx(expected, rel=1e-9)
+    assert "sgm_10s" in solvers.columns
+    for name in ("study.png", "profile_time.png", "profile_accuracy.png"):
+        png = (out / name).read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000, name
+    meta = json.loads((out / "metadata.json").read_text())
+    assert (
+        meta["command_line"][:2] == ["lpbounds", "compare"]
+        and "--time-limit" in meta["command_line"]
+    )
+    assert meta["dependencies"]["cvxpy"] == version("cvxpy")
+    assert meta["study_solvers"]["CLARABEL"]["packages"] == {"clarabel": version("clarabel")}
+    assert meta["study_solvers"]["HIGHS"]["packages"] == {"highspy": version("highspy")}
+    assert meta["study_solvers"]["CLARABEL"]["requires"]["numpy"] == version("numpy")
+    assert meta["machine"]["cpus"] >= 1 and meta["machine"]["cpu"]
+    assert meta["study"]["time_limit"] == 60 and meta["study"]["accuracy"] == 1e-6
 
 
 @pytest.mark.parametrize(
@@ -238,3 +269,152 @@ def test_dask_scheduler_matches_local():
     assert res.frame["objective"].iloc[0] == pytest.approx(
         local.frame["objective"].iloc[0], rel=1e-12
     )
+
+
+# ---------------------------------------------------------------------- issue 14
+def test_lp_solvers_read_from_cvxpy_classes(monkeypatch):
+    """LP-capable = a conic class with Zero and NonNeg cones, or a QP class: an NLP solver
+    (IPOPT) and DIFFCP (SCS differentiated) are left out whatever cvxpy reports."""
+    import cvxpy as cp
+
+    from lpbounds import solver_catalog
+
+    fake = ["SCS", "IPOPT", "DIFFCP", "OSQP", "HIGHS", "SDPA"]
+    monkeypatch.setattr(cp, "installed_solvers", lambda: fake)
+    solver_catalog.lp_capable_solvers.cache_clear()
+    try:
+        got = solver_catalog.lp_capable_solvers()
+    finally:
+        monkeypatch.undo()
+        solver_catalog.lp_capable_solvers.cache_clear()
+    # SDPA: Zero, NonNeg and PSD cones (an LP fits); OSQP: a QP solver; HIGHS first
+    assert got == ("HIGHS", "SCS", "SDPA", "OSQP"), got
+
+
+def test_every_installed_lp_solver_is_in_the_default_study():
+    import cvxpy as cp
+
+    configs, notes = solver_configs(None)
+    solvers = {c.solver for c in configs}
+    for name in ("HIGHS", "CLARABEL", "SCS", "OSQP", "SCIPY"):
+        if name in cp.installed_solvers():
+            assert name in solvers, (name, solvers)
+    labels = {c.label for c in configs}
+    assert {"CLARABEL", "CLARABEL:tight"} <= labels
+    scipy_cfg = next(c for c in configs if c.solver == "SCIPY")
+    assert "HiGHS" in scipy_cfg.backend
+    assert any("SCIPY is HiGHS" in n for n in notes), notes
+
+
+@pytest.mark.parametrize(
+    ("module", "solver"),
+    [("daqp", "DAQP"), ("proxsuite", "PROXQP"), ("pyscipopt", "SCIP"), ("ortools", "PDLP")],
+)
+def test_optional_solvers_are_found_when_installed(module, solver):
+    import cvxpy as cp
+
+    from lpbounds.solver_catalog import lp_capable_solvers
+
+    pytest.importorskip(module, reason=f"{module} is not installed here (optional)")
+    if solver not in cp.installed_solvers():
+        pytest.skip(f"cvxpy does not load {solver} with this {module}")
+    assert solver in lp_capable_solvers()
+    res = run_study(["garnet:20:4:1"], ["RLP"], [solver], jobs=1)
+    row = res.frame.iloc[0]
+    assert row["status"] in ("optimal", "inaccurate", "infeasible"), row
+    if row["status"] == "infeasible":  # PROXQP did: the row says why that is wrong
+        assert "feasible by construction" in row["note"], row["note"]
+
+
+def test_with_time_limit_merges_each_solvers_keyword():
+    from lpbounds.solver_catalog import with_time_limit
+
+    opts, ok = with_time_limit("HIGHS", {"highs_options": {"solver": "ipm"}}, 5.0)
+    assert ok and opts == {"highs_options": {"solver": "ipm", "time_limit": 5.0}}
+    assert with_time_limit("SCS", {}, 2.0) == ({"time_limit_secs": 2.0}, True)
+    assert with_time_limit("CLARABEL", {"tol_feas": 1e-9}, 2.0)[0] == {
+        "tol_feas": 1e-9,
+        "time_limit": 2.0,
+    }
+    assert with_time_limit("DAQP", {}, 2.0) == ({}, False)
+    assert with_time_limit("SCS", {"a": 1}, None) == ({"a": 1}, True)
+
+
+def test_limit_status_rules():
+    from lpbounds.study import _limit_status
+
+    assert _limit_status("limit", 1.99, 2.0) == "time_limit"  # USER_LIMIT at the limit
+    assert _limit_status("inaccurate", 2.3, 2.0) == "time_limit"  # SCS stops "inaccurate"
+    assert _limit_status("limit", 0.5, 2.0) == "limit"  # an iteration limit, not time
+    assert _limit_status("optimal", 3.0, 2.0) == "optimal"  # certified: stays optimal
+    assert _limit_status("infeasible", 3.0, 2.0) == "infeasible"
+    assert _limit_status("limit", 3.0, None) == "limit"
+
+
+def test_time_limit_keeps_the_point_and_its_certified_error():
+    """HiGHS PDLP stopped after 5 ms on an ELP it needs far longer for: status time_limit,
+    the point kept, and its certified error still bounds the distance to V*."""
+    res = run_study(["garnet:1500:20:1"], ["ELP"], ["HIGHS:pdlp"], time_limit=0.005, jobs=1)
+    row = res.frame.iloc[0]
+    assert row["status"] == "time_limit", row[["status", "solve_seconds", "note"]]
+    assert np.isfinite(row["certified_error"]) and np.isfinite(row["max_deviation"])
+    assert row["max_deviation"] <= row["certified_error"] + row["reference_error_bound"]
+    assert "time limit 0.005 s reached" in row["note"]
+    summ = res.solver_summary((1.0,)).iloc[0]
+    assert summ["time_limit"] == 1 and summ["solved"] == 0
+    assert summ["sgm_1s"] == pytest.approx(0.005, rel=1e-12)  # one unsolved: the limit
+
+
+def test_bad_time_limit_is_an_error():
+    with pytest.raises(ValidationError, match="time_limit"):
+        run_study(["garnet:20:4"], ["RLP"], ["HIGHS:ipm"], time_limit=-1.0)
+
+
+def test_infeasible_answer_gets_a_comment(monkeypatch):
+    """A solver answering "infeasible" (as PROXQP did) on a feasible LP: the row keeps the
+    status, counts as failed, and says the exact fixed point is feasible."""
+    from lpbounds.formulations.rlp import RLP
+    from lpbounds.status import Status
+
+    original = RLP.solve
+
+    def infeasible(self, *args, **kwargs):
+        res = original(self, *args, **kwargs)
+        res.status = Status.INFEASIBLE
+        res.x = np.full_like(res.x, np.nan)
+        return res
+
+    monkeypatch.setattr(RLP, "solve", infeasible)
+    res = run_study(["garnet:30:4:2"], ["RLP"], ["HIGHS:simplex"], jobs=1)
+    row = res.frame.iloc[0]
+    assert row["status"] == "infeasible" and not row["accurate"]
+    assert "feasible by construction" in row["note"], row["note"]
+    violation = float(row["note"].rsplit("largest violation ", 1)[1].rstrip(")"))
+    assert violation <= 1e-9
+    assert res.solver_summary().iloc[0]["failed"] == 1
+
+
+def test_a_crashing_solver_is_a_row_not_an_abort(monkeypatch):
+    from lpbounds.formulations.rlp import RLP
+
+    def crash(self, *args, **kwargs):
+        raise ModuleNotFoundError("No module named 'google'")
+
+    monkeypatch.setattr(RLP, "solve", crash)
+    res = run_study(["garnet:20:4:2"], ["RLP"], ["HIGHS:simplex"], jobs=1)
+    row = res.frame.iloc[0]
+    assert row["status"] == "solver_error" and "ModuleNotFoundError" in row["note"]
+
+
+@pytest.mark.parametrize("scheduler", ["synchronous", "threads"])
+def test_dask_local_scheduler_matches_local(scheduler):
+    pytest.importorskip("dask", reason="the optional 'study' extra")
+    specs = (["garnet:30:4:5", "garnet:25:5:6"], ["RLP"], ["HIGHS:simplex", "CLARABEL:default"])
+    res = run_study(*specs, scheduler=scheduler)
+    local = run_study(*specs, jobs=1)
+    key = ["instance", "config"]
+    a = res.frame.set_index(key)["objective"].sort_index()
+    b = local.frame.set_index(key)["objective"].sort_index()
+    assert a.index.equals(b.index) and len(a) == 4
+    assert np.allclose(a.to_numpy(), b.to_numpy(), rtol=1e-9, atol=0)
+    assert res.params["scheduler"] == scheduler

@@ -14,3 +14,7 @@ DEFAULT_FORMULATIONS: tuple[str, ...] = ("ELP", "RLP")
 DEFAULT_MODEL = "models/patrol-paper.toml"
 DEFAULT_OUT = "out/reproduce"
 DEFAULT_SEEDS: tuple[int, ...] = (1, 2, 3, 4, 5)
+
+#: Shifts (seconds) of a study's shifted geometric means of time: Mittelmann's 10 s, and
+#: 0.01 s, which separates solvers on sub-second solves (lpbounds.study_report).
+DEFAULT_SHIFTS: tuple[float, ...] = (10.0, 0.01)

@@ -51,7 +51,6 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -59,7 +58,23 @@ import numpy as np
 from ._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES
 from .checks import lp_bracket
 from .errors import LPBoundsError, SolverNotInstalledError, ValidationError
+from .solver_catalog import (
+    backend,
+    highs_algorithms,
+    known_option_sets,
+    lp_capable_solvers,
+    option_sets,
+    with_time_limit,
+)
 from .status import POINT_STATUSES, Status
+from .study_report import (
+    DEFAULT_SHIFTS,
+    plot_study,
+    save_study,
+    solver_summary,
+    study_metadata,
+    summarize,
+)
 from .tolerances import LP_CERT_RTOL, LP_COMPARE_RTOL, dp_scale
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -74,12 +89,15 @@ __all__ = [
     "FORMULATIONS",
     "SolverConfig",
     "StudyResult",
+    "Task",
     "available_formulations",
     "highs_algorithms",
     "plot_study",
     "run_study",
     "save_study",
     "solver_configs",
+    "solver_summary",
+    "study_metadata",
     "summarize",
 ]
 
@@ -97,11 +115,14 @@ COLUMNS: tuple[str, ...] = (
     "solver",
     "option_set",
     "config",
+    "backend",
     "repeat",
     "status",
     "objective",
     "certified_error",
+    "rel_error",
     "accuracy",
+    "time_limit",
     "accurate",
     "max_deviation",
     "deviation_tol",
@@ -142,44 +163,43 @@ class SolverConfig:
         """``SOLVER`` or ``SOLVER:SET``."""
         return self.solver if self.option_set == "default" else f"{self.solver}:{self.option_set}"
 
-
-#: HiGHS option sets: name -> the value of HiGHS' ``solver`` option and extra options.
-#: ``output_flag=False`` keeps PDLP's log off stdout.
-_HIGHS_SETS: dict[str, dict[str, Any]] = {
-    "simplex": {"solver": "simplex"},
-    "ipm": {"solver": "ipm", "run_crossover": "on"},
-    "ipm-nox": {"solver": "ipm", "run_crossover": "off"},
-    "pdlp": {"solver": "pdlp"},
-}
+    @property
+    def backend(self) -> str:
+        """The code that runs (``SCIPY``: HiGHS inside scipy; see :data:`BACKENDS`)."""
+        return backend(self.solver)
 
 
-@lru_cache(maxsize=1)
-def highs_algorithms() -> tuple[str, ...]:
-    """The values of HiGHS' ``solver`` option that the installed highspy accepts."""
-    try:
-        import highspy
-    except ImportError:  # pragma: no cover - highspy is a dependency
-        return ()
-    from ._quiet import quiet_highs
+def _missing_note(installed: Sequence[str]) -> str | None:
+    """The known solvers that are not installed (licensed ones left out), with install lines."""
+    from .formulations.base import INSTALL_HINTS
 
-    h = quiet_highs()  # no banner on stdout
-    return tuple(
-        a
-        for a in ("simplex", "ipm", "pdlp")
-        if h.setOptionValue("solver", a) == highspy.HighsStatus.kOk
-    )
+    missing = [
+        s
+        for s in INSTALL_HINTS
+        if s not in installed and "licence" not in INSTALL_HINTS[s] and s != "GLPK_MI"
+    ]
+    if not missing:
+        return None
+    return "not installed, skipped: " + ", ".join(f"{s} ({INSTALL_HINTS[s]})" for s in missing)
 
 
-def _option_sets(solver: str) -> dict[str, dict[str, Any]]:
-    """The named option sets of an installed solver (name -> solve() keyword arguments)."""
-    if solver == "HIGHS":
-        have = set(highs_algorithms())
-        return {
-            name: {"highs_options": {**opts, "output_flag": False}}
-            for name, opts in _HIGHS_SETS.items()
-            if opts["solver"] in have
-        }
-    return {"default": {}}
+def _expand(spec: str, solver: str, opt: str, notes: list[str]) -> dict[str, dict[str, Any]]:
+    """The option sets ``spec`` names (all when ``opt`` is empty); skips noted, typos raised."""
+    sets = option_sets(solver)
+    known = known_option_sets(solver)
+    unsupported = sorted(set(known) - set(sets))
+    if unsupported and not opt:
+        notes.append(f"{solver}: this installation does not accept {unsupported}; skipped")
+    if not opt:
+        return sets
+    if opt not in sets:
+        if opt not in known:
+            raise ValidationError(
+                f"solver {spec!r}: unknown option set {opt!r}; {solver} has {known}"
+            )
+        notes.append(f"{spec}: skipped: this {solver} does not accept {opt!r}")
+        return {}
+    return {opt: sets[opt]}
 
 
 def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfig], list[str]]:
@@ -189,31 +209,30 @@ def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfi
     ----------
     names : iterable of str, optional
         ``"HIGHS"`` (every HiGHS option set), ``"HIGHS:ipm"`` (one set), ``"CLARABEL"``,
-        ... (case-insensitive). Default: every installed LP-capable cvxpy solver.
+        ... (case-insensitive). Default: every LP-capable solver cvxpy finds installed
+        (:func:`lpbounds.solver_catalog.lp_capable_solvers`: read from cvxpy's solver
+        classes), every option set of each.
 
     Returns
     -------
     configs : list of SolverConfig
     notes : list of str
         One line per solver or option set skipped, and why (a known solver that is not
-        installed, a HiGHS algorithm this highspy does not accept).
+        installed, a HiGHS algorithm this highspy does not accept), and one per solver
+        whose backend is another's (``SCIPY`` runs HiGHS).
 
     Raises
     ------
     ValidationError
         For a solver name that no one knows or an unknown option set (typos).
     """
-    from .formulations.base import INSTALL_HINTS, installed_lp_solvers, resolve_solver
+    from .formulations.base import INSTALL_HINTS, resolve_solver
 
     notes: list[str] = []
     if names is None:
-        names = installed_lp_solvers()
-        missing = [s for s in INSTALL_HINTS if s not in names and "licence" not in INSTALL_HINTS[s]]
-        missing = [s for s in missing if s not in ("GLPK_MI",)]
-        if missing:
-            notes.append(
-                "not installed, skipped: " + ", ".join(f"{s} ({INSTALL_HINTS[s]})" for s in missing)
-            )
+        names = list(lp_capable_solvers())
+        if (line := _missing_note(names)) is not None:
+            notes.append(line)
     configs: list[SolverConfig] = []
     for spec in names:
         name, _, opt = str(spec).partition(":")
@@ -224,25 +243,21 @@ def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfi
                 raise ValidationError(f"solver {spec!r}: {exc}") from exc
             notes.append(f"{spec}: skipped: {exc}")
             continue
-        sets = _option_sets(solver)
-        if solver == "HIGHS":
-            unsupported = sorted(set(_HIGHS_SETS) - set(sets))
-            if unsupported and not opt:
-                notes.append(f"HIGHS: this highspy does not accept {unsupported}; skipped")
-        if opt:
-            if opt not in sets:
-                known = sorted(_HIGHS_SETS) if solver == "HIGHS" else sorted(sets)
-                if opt not in known:
-                    raise ValidationError(
-                        f"solver {spec!r}: unknown option set {opt!r}; {solver} has {known}"
-                    )
-                notes.append(f"{spec}: skipped: this {solver} does not accept {opt!r}")
-                continue
-            sets = {opt: sets[opt]}
-        for set_name, options in sets.items():
+        if solver not in lp_capable_solvers():
+            raise ValidationError(
+                f"solver {spec!r}: cvxpy's {solver} does not take an LP (neither a conic solver "
+                f"with zero and nonnegative cones nor a QP solver); LP solvers here: "
+                f"{', '.join(lp_capable_solvers())}"
+            )
+        for set_name, options in _expand(str(spec), solver, opt, notes).items():
             cfg = SolverConfig(solver, set_name, options)
             if cfg not in configs:
                 configs.append(cfg)
+    if any(c.solver == "SCIPY" for c in configs):
+        notes.append(
+            "SCIPY is HiGHS inside scipy.optimize.linprog (the same code as HIGHS, reached "
+            "through scipy's interface): not an independent solver"
+        )
     return configs, notes
 
 
@@ -531,78 +546,137 @@ def _compare(result: Any, exact: np.ndarray) -> float:
     return float("nan")
 
 
-def run_task(
-    task: tuple[str, str, SolverConfig, int] | tuple[str, str, SolverConfig, int, float],
-) -> list[dict[str, Any]]:
-    """Solve one (instance, formulation, solver configuration) ``repeat`` times.
+@dataclass(frozen=True)
+class Task:
+    """One (instance, formulation, solver configuration), solved ``repeat`` times."""
 
-    ``task`` is ``(instance, formulation, config, repeat[, accuracy])``. Returns one
-    record per repetition (keys :data:`COLUMNS`). Errors of the model or the solver are
-    recorded in ``status``/``note``, never raised, so one failure does not stop a study.
+    instance: str
+    formulation: str
+    config: SolverConfig
+    repeat: int = 1
+    accuracy: float = LP_CERT_RTOL
+    time_limit: float | None = None
+
+
+#: Share of the time limit from which a stop that is not OPTIMAL counts as the limit's hit
+#: (solvers stop a little before or after it).
+_AT_LIMIT = 0.98
+
+
+def _limit_status(status: str, solver_seconds: float, time_limit: float | None) -> str:
+    """``time_limit`` when a solve that did not end OPTIMAL used up its time limit.
+
+    cvxpy folds every limit into ``USER_LIMIT`` (``limit``) for most solvers, and SCS
+    reports a stop at its time limit as "solved inaccurate"; HiGHS' own ``time_limit``
+    already arrives as such. A point returned at the limit keeps its certified error.
     """
-    spec, formulation, cfg, repeat = task[:4]
-    accuracy = float(task[4]) if len(task) > 4 else LP_CERT_RTOL
+    if time_limit is None or status in (Status.OPTIMAL.value, Status.TIME_LIMIT.value):
+        return status
+    if status in (Status.INFEASIBLE.value, Status.UNBOUNDED.value):
+        return status
+    return Status.TIME_LIMIT.value if solver_seconds >= _AT_LIMIT * time_limit else status
+
+
+def _infeasible_comment(form: Any, exact: np.ndarray) -> str:
+    """The row violation of the exact solution, to say why "infeasible" is wrong."""
+    if exact.size != form.A.shape[1]:
+        return (
+            "the solver says infeasible, but this LP is feasible by construction (the exact "
+            "fixed point of its Bellman rows is a feasible point)"
+        )
+    viol = float(max(0.0, (form.b - form.A @ exact).max(initial=0.0)))
+    return (
+        "the solver says infeasible, but this LP is feasible by construction: the exact "
+        f"fixed point satisfies every row up to rounding (largest violation {viol:.1e})"
+    )
+
+
+def _solve_once(task: Task, case: Case, exact: np.ndarray, rec: dict[str, Any]) -> None:
+    """Build, solve and judge one repetition into ``rec`` (errors recorded, not raised)."""
+    cfg = task.config
+    options, _ = with_time_limit(cfg.solver, cfg.options, task.time_limit)
+    t0 = time.perf_counter()
+    try:
+        form = FORMULATIONS[task.formulation].build(case)
+        rec["n_rows"], rec["n_vars"] = (int(s) for s in form.A.shape)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = form.solve(cfg.solver, accuracy=task.accuracy, raise_on_failure=False, **options)
+    except Exception as exc:  # noqa: BLE001 - a third-party solver's crash is a row, not an abort
+        what = str(exc) if isinstance(exc, LPBoundsError) else f"{type(exc).__name__}: {exc}"
+        rec.update(status=Status.SOLVER_ERROR.value, accurate=False, note=what)
+        rec["certified_error"] = rec["rel_error"] = math.inf
+        rec["wall_seconds"] = time.perf_counter() - t0
+        return
+    rec["wall_seconds"] = time.perf_counter() - t0
+    status = _limit_status(_status(res), float(res.solve_seconds or 0.0), task.time_limit)
+    has_point = bool(np.isfinite(np.asarray(res.x, dtype=np.float64)).all())
+    has_point = has_point and status in {s.value for s in POINT_STATUSES}
+    dev = _compare(res, exact) if has_point else float("nan")
+    cert_err, scale = (
+        _certified_error(case, task.formulation, form, res) if has_point else (math.inf, 1.0)
+    )
+    notes = [str(res.extra["message"])] if "message" in res.extra else []
+    notes += sorted({f"{w.category.__name__}: {w.message}" for w in caught})
+    if status == Status.INFEASIBLE.value:
+        notes.append(_infeasible_comment(form, exact))
+    if status == Status.TIME_LIMIT.value:
+        notes.append(
+            f"time limit {task.time_limit:g} s reached"
+            + ("" if has_point else "; no point returned")
+        )
+    rec.update(
+        status=status,
+        objective=res.objective,
+        certified_error=cert_err,
+        rel_error=cert_err / scale,
+        accurate=bool(has_point and cert_err <= task.accuracy * scale),
+        max_deviation=dev,
+        primal_residual=res.primal_residual,
+        residual_tol=res.residual_tol,
+        dual_residual=res.dual_residual,
+        gap=res.gap,
+        compile_seconds=res.compile_seconds,
+        solve_seconds=res.solve_seconds,
+        iterations=res.iterations,
+        note="; ".join(notes),
+    )
+
+
+def run_task(task: Task) -> list[dict[str, Any]]:
+    """Solve one (instance, formulation, solver configuration) ``task.repeat`` times.
+
+    Returns one record per repetition (keys :data:`COLUMNS`). Errors of the model or the
+    solver are recorded in ``status``/``note``, never raised, so one failure does not
+    stop a study.
+    """
+    cfg = task.config
     base: dict[str, Any] = dict.fromkeys(COLUMNS)
+    _, limited = with_time_limit(cfg.solver, cfg.options, task.time_limit)
     base.update(
-        instance=spec,
-        formulation=formulation,
+        instance=task.instance,
+        formulation=task.formulation,
         solver=cfg.solver,
         option_set=cfg.option_set,
         config=cfg.label,
+        backend=cfg.backend,
+        accuracy=task.accuracy,
+        time_limit=task.time_limit if limited else None,
         note="",
     )
     try:
-        case = load_case(spec)
+        case = load_case(task.instance)
         base["instance"] = case.name
         base["n_states"], base["n_partitions"] = case.sizes()
-        exact, ref_bound = _reference(spec, formulation)
+        exact, ref_bound = _reference(task.instance, task.formulation)
     except (LPBoundsError, ImportError) as exc:
         return [{**base, "repeat": 0, "status": "skipped", "note": str(exc)}]
-    deviation_tol = LP_COMPARE_RTOL * max(1.0, float(np.abs(exact).max(initial=0.0)))
+    base["reference_error_bound"] = ref_bound
+    base["deviation_tol"] = LP_COMPARE_RTOL * max(1.0, float(np.abs(exact).max(initial=0.0)))
     records = []
-    for k in range(repeat):
-        rec = {**base, "repeat": k, "reference_error_bound": ref_bound}
-        rec["deviation_tol"] = deviation_tol
-        rec["accuracy"] = accuracy
-        t0 = time.perf_counter()
-        try:
-            form = FORMULATIONS[formulation].build(case)
-            rec["n_rows"], rec["n_vars"] = (int(s) for s in form.A.shape)
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                res = form.solve(
-                    cfg.solver, accuracy=accuracy, raise_on_failure=False, **dict(cfg.options)
-                )
-        except LPBoundsError as exc:
-            rec.update(status=Status.SOLVER_ERROR.value, accurate=False, note=str(exc))
-            rec["wall_seconds"] = time.perf_counter() - t0
-            records.append(rec)
-            continue
-        rec["wall_seconds"] = time.perf_counter() - t0
-        status = _status(res)
-        has_point = status in {s.value for s in POINT_STATUSES}
-        dev = _compare(res, exact) if has_point else float("nan")
-        cert_err, scale = (
-            _certified_error(case, formulation, form, res) if has_point else (math.inf, 1.0)
-        )
-        rec.update(
-            status=status,
-            objective=res.objective,
-            certified_error=cert_err,
-            accurate=bool(has_point and cert_err <= accuracy * scale),
-            max_deviation=dev,
-            primal_residual=res.primal_residual,
-            residual_tol=res.residual_tol,
-            dual_residual=res.dual_residual,
-            gap=res.gap,
-            compile_seconds=res.compile_seconds,
-            solve_seconds=res.solve_seconds,
-            iterations=res.iterations,
-            note="; ".join(
-                ([str(res.extra["message"])] if "message" in res.extra else [])
-                + sorted({f"{w.category.__name__}: {w.message}" for w in caught})
-            ),
-        )
+    for k in range(task.repeat):
+        rec = {**base, "repeat": k}
+        _solve_once(task, case, exact, rec)
         records.append(rec)
     return records
 
@@ -610,15 +684,22 @@ def run_task(
 # ---------------------------------------------------------------------- the study
 @dataclass
 class StudyResult:
-    """A study's table (one row per solve) and the notes on what was skipped."""
+    """A study's table (one row per solve), the notes on what was skipped, and how it was
+    run (``params``: instances, formulations, configurations, accuracy, time limit)."""
 
     frame: pd.DataFrame
     notes: list[str]
     seconds: float
+    params: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> pd.DataFrame:
         """Median over repetitions per (instance, formulation, solver configuration)."""
         return summarize(self.frame)
+
+    def solver_summary(self, shifts: Sequence[float] = DEFAULT_SHIFTS) -> pd.DataFrame:
+        """Per solver configuration: counts and shifted geometric means of time
+        (:func:`lpbounds.study_report.solver_summary`)."""
+        return solver_summary(self.frame, shifts, time_limit=self.params.get("time_limit"))
 
 
 def run_study(
@@ -628,6 +709,7 @@ def run_study(
     *,
     repeat: int = 1,
     accuracy: float = LP_CERT_RTOL,
+    time_limit: float | None = None,
     jobs: int | None = None,
     scheduler: str | Any | None = None,
     progress: Callable[[int, int], None] | None = None,
@@ -648,11 +730,18 @@ def run_study(
     accuracy : float
         Requested accuracy relative to ``max|R| / (1 - lambda)``: passed to each solve
         (its status) and the threshold of the ``accurate`` column on ``certified_error``.
+    time_limit : float, optional
+        Seconds per solve, passed in each solver's own keyword
+        (:data:`lpbounds.solver_catalog.TIME_LIMIT_OPTIONS`; a solver without one runs
+        unlimited, with a note). A solve that used it up without an OPTIMAL point has
+        status ``time_limit`` and keeps its point and certified error.
     jobs : int, optional
         Local worker processes (default ``os.cpu_count()``); ``1`` runs in this process.
     scheduler : str or dask.distributed.Client, optional
-        Address of a running Dask scheduler (``"tcp://127.0.0.1:8786"``), or a client;
-        the tasks then run on that cluster instead of local processes.
+        ``"synchronous"``, ``"threads"`` or ``"processes"`` (dask's local schedulers,
+        without a cluster), the address of a running Dask scheduler
+        (``"tcp://127.0.0.1:8786"``), or a client; the tasks then run through Dask
+        instead of local processes.
     progress : callable(done, total), optional
         Called after each finished task.
 
@@ -664,19 +753,37 @@ def run_study(
     ------
     ValidationError
         Before any solve: a missing instance file, an unknown solver or option set, no
-        solver or formulation left to run, a bad ``repeat`` or ``accuracy``.
+        solver or formulation left to run, a bad ``repeat``, ``accuracy`` or
+        ``time_limit``.
     """
     import pandas as pd
 
     t0 = time.perf_counter()
-    tasks, notes = _prepare_tasks(instances, formulations, solvers, repeat, accuracy)
+    tasks, notes = _prepare_tasks(instances, formulations, solvers, repeat, accuracy, time_limit)
     records = _execute(tasks, jobs, scheduler, progress)
     frame = pd.DataFrame.from_records(records, columns=list(COLUMNS))
     skipped = frame[frame["status"] == "skipped"]
     for (inst, form), grp in skipped.groupby(["instance", "formulation"]):
         notes.append(f"{form} on {inst}: skipped: {grp['note'].iloc[0]}")
     frame = frame[frame["status"] != "skipped"].reset_index(drop=True)
-    return StudyResult(frame, notes, time.perf_counter() - t0)
+    configs: list[SolverConfig] = []
+    for t in tasks:  # SolverConfig holds a dict: not hashable, compared instead
+        if t.config not in configs:
+            configs.append(t.config)
+    params = {
+        "instances": list(dict.fromkeys(t.instance for t in tasks)),
+        "formulations": list(dict.fromkeys(t.formulation for t in tasks)),
+        "configs": [
+            {"label": c.label, "solver": c.solver, "backend": c.backend, "options": c.options}
+            for c in configs
+        ],
+        "repeat": repeat,
+        "accuracy": float(accuracy),
+        "time_limit": time_limit,
+        "jobs": jobs,
+        "scheduler": scheduler if isinstance(scheduler, (str, type(None))) else "client",
+    }
+    return StudyResult(frame, notes, time.perf_counter() - t0, params)
 
 
 def _prepare_tasks(
@@ -685,14 +792,18 @@ def _prepare_tasks(
     solvers: Sequence[str] | None,
     repeat: int,
     accuracy: float,
-) -> tuple[list[tuple[str, str, SolverConfig, int, float]], list[str]]:
+    time_limit: float | None = None,
+) -> tuple[list[Task], list[str]]:
     """The tasks of a study and its notes; every input error raised here, before a solve."""
     from .instances import load_instance
+    from .validation import check_real
 
     if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
         raise ValidationError(f"repeat must be an integer >= 1; got {repeat!r}")
     if not (isinstance(accuracy, (int, float)) and math.isfinite(accuracy) and accuracy > 0):
         raise ValidationError(f"accuracy must be a positive finite number; got {accuracy!r}")
+    if time_limit is not None:
+        time_limit = check_real("time_limit", time_limit, lo=0.0, lo_open=True)
     instances = list(instances) if instances else list(DEFAULT_INSTANCES)
     for spec in instances:
         if parse_instance(spec)[1] is None:
@@ -704,20 +815,53 @@ def _prepare_tasks(
         raise ValidationError("no formulation to run: " + "; ".join(notes))
     if not configs:
         raise ValidationError("no solver to run: " + ("; ".join(solver_notes) or "none given"))
-    tasks = [(s, f, c, repeat, float(accuracy)) for s in instances for f in names for c in configs]
+    if time_limit is not None:
+        unlimited = sorted({c.solver for c in configs if not with_time_limit(c.solver, {}, 1.0)[1]})
+        if unlimited:
+            notes.append(f"no time-limit option known for {unlimited}: they run without one")
+    tasks = [
+        Task(s, f, c, repeat, float(accuracy), time_limit)
+        for s in instances
+        for f in names
+        for c in configs
+    ]
     return tasks, notes
 
 
+def _run_dask(tasks: list[Task], scheduler: str | Any) -> Iterable[list[dict[str, Any]]]:
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError as exc:
+        raise SolverNotInstalledError(
+            "--scheduler needs dask.distributed: pip install 'lpbounds[study]'"
+        ) from exc
+    own = not isinstance(scheduler, Client)
+    client = Client(scheduler) if own else cast(Client, scheduler)
+    try:
+        futures = client.map(run_task, tasks, pure=False)
+        for fut in as_completed(futures):
+            yield fut.result()
+    finally:
+        if own:
+            client.close()
+
+
+#: Dask's local schedulers, usable without a cluster (``scheduler="threads"``).
+DASK_LOCAL = ("synchronous", "threads", "processes")
+
+
 def _execute(
-    tasks: list[Any],
+    tasks: list[Task],
     jobs: int | None,
     scheduler: str | Any | None,
     progress: Callable[[int, int], None] | None,
 ) -> list[dict[str, Any]]:
-    """Run the tasks on a Dask cluster, in this process, or in spawned local processes."""
+    """Run the tasks through Dask, in this process, or in spawned local processes."""
     records: list[dict[str, Any]] = []
-    if scheduler is not None:
-        batches: Iterable[list[dict[str, Any]]] = _run_dask(tasks, scheduler)
+    if scheduler in DASK_LOCAL:
+        batches: Iterable[list[dict[str, Any]]] = _run_dask_local(tasks, str(scheduler))
+    elif scheduler is not None:
+        batches = _run_dask(tasks, scheduler)
     elif (jobs or os.cpu_count() or 1) <= 1 or len(tasks) <= 1:
         batches = map(run_task, tasks)
     else:
@@ -738,120 +882,13 @@ def _execute(
     return records
 
 
-def _run_dask(tasks: list[Any], scheduler: str | Any) -> Iterable[list[dict[str, Any]]]:
+def _run_dask_local(tasks: list[Task], scheduler: str) -> list[list[dict[str, Any]]]:
+    """The tasks as dask.delayed calls, computed by one of Dask's local schedulers."""
     try:
-        from dask.distributed import Client, as_completed
+        import dask
     except ImportError as exc:
         raise SolverNotInstalledError(
-            "--scheduler needs dask.distributed: pip install 'lpbounds[study]'"
+            f"scheduler {scheduler!r} needs dask: pip install 'lpbounds[study]'"
         ) from exc
-    own = not isinstance(scheduler, Client)
-    client = Client(scheduler) if own else cast(Client, scheduler)
-    try:
-        futures = client.map(run_task, tasks, pure=False)
-        for fut in as_completed(futures):
-            yield fut.result()
-    finally:
-        if own:
-            client.close()
-
-
-def summarize(frame: pd.DataFrame) -> pd.DataFrame:
-    """Median times over repetitions per (instance, formulation, configuration).
-
-    ``status`` joins the distinct statuses; ``accurate`` is true only when every
-    repetition was (a point, certified within the requested accuracy);
-    ``certified_error`` and ``max_deviation`` are the largest over repetitions."""
-    keys = ["instance", "formulation", "config"]
-    agg = frame.groupby(keys, sort=False).agg(
-        n_vars=("n_vars", "first"),
-        status=("status", lambda s: ",".join(sorted(set(s)))),
-        objective=("objective", "median"),
-        certified_error=("certified_error", "max"),
-        accurate=("accurate", "all"),
-        max_deviation=("max_deviation", "max"),
-        primal_residual=("primal_residual", "max"),
-        compile_seconds=("compile_seconds", "median"),
-        solve_seconds=("solve_seconds", "median"),
-        iterations=("iterations", "median"),
-        repeats=("repeat", "count"),
-    )
-    return agg.reset_index()
-
-
-def plot_study(frame: pd.DataFrame, path: str | Path) -> Path:
-    """Save the summary figure: solve time vs LP size per solver; certified error vs time."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    path = Path(path)
-    ok = frame[frame["status"].isin([st.value for st in POINT_STATUSES])]
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
-    markers = dict(zip(sorted(frame["formulation"].unique()), "osD^v<>ph*", strict=False))
-    configs = sorted(frame["config"].unique())
-    colors = {c: plt.cm.tab10(i % 10) for i, c in enumerate(configs)}
-    for (cfg, form), grp in ok.groupby(["config", "formulation"]):
-        med = grp.groupby("n_vars", as_index=False)["solve_seconds"].median()
-        ax1.plot(
-            med["n_vars"],
-            med["solve_seconds"],
-            marker=markers[form],
-            color=colors[cfg],
-        )
-        total = grp["compile_seconds"] + grp["solve_seconds"]
-        err = np.maximum(grp["certified_error"].astype(float), 1e-16)
-        ax2.scatter(total, err, marker=markers[form], color=colors[cfg])
-    ax1.set(
-        xscale="log",
-        yscale="log",
-        xlabel="LP variables",
-        ylabel="solve time (s, median)",
-        title="solve time vs size",
-    )
-    ax2.set(
-        xscale="log",
-        yscale="log",
-        xlabel="compile + solve time (s)",
-        ylabel="certified error bound (floored at 1e-16)",
-        title="accuracy vs time",
-    )
-    ax1.grid(True, which="both", alpha=0.3)
-    ax2.grid(True, which="both", alpha=0.3)
-    from matplotlib.lines import Line2D
-
-    color_keys = [Line2D([], [], color=colors[c], marker="o", ls="-", label=c) for c in configs]
-    marker_keys = [Line2D([], [], color="k", marker=m, ls="", label=f) for f, m in markers.items()]
-    fig.legend(
-        handles=color_keys + marker_keys,
-        loc="center right",
-        fontsize=8,
-        frameon=False,
-        title="solver (colour) / formulation (marker)",
-        title_fontsize=8,
-    )
-    fig.tight_layout(rect=(0, 0, 0.8, 1))
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
-
-
-def save_study(result: StudyResult, out: str | Path) -> dict[str, Path]:
-    """Write ``study.csv`` (and ``study.parquet`` if pyarrow is installed),
-    ``summary.csv``, ``notes.txt`` and ``study.png`` into ``out``; returns the paths."""
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"csv": out / "study.csv", "summary": out / "summary.csv", "notes": out / "notes.txt"}
-    result.frame.to_csv(paths["csv"], index=False)
-    result.summary().to_csv(paths["summary"], index=False)
-    paths["notes"].write_text("".join(f"{n}\n" for n in result.notes))
-    try:
-        import pyarrow  # noqa: F401
-
-        paths["parquet"] = out / "study.parquet"
-        result.frame.to_parquet(paths["parquet"], index=False)
-    except ImportError:
-        pass
-    paths["plot"] = plot_study(result.frame, out / "study.png")
-    return paths
+    calls = [dask.delayed(run_task, pure=False)(t) for t in tasks]
+    return list(dask.compute(*calls, scheduler=scheduler))

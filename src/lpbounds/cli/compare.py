@@ -5,17 +5,18 @@ from __future__ import annotations
 import argparse
 import logging
 import math
+import sys
 from typing import Any
 
 from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from .._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES
+from .._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES, DEFAULT_SHIFTS
 from ..errors import ValidationError
 from ..outputs import MANIFEST, AtomicDirectory
 from ..tolerances import LP_CERT_RTOL
-from ._common import check_output_dir, console, print_table, progress
+from ._common import check_output_dir, console, positive_float, print_table, progress
 
 log = logging.getLogger("lpbounds")
 
@@ -25,10 +26,14 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         "compare",
         help="solve every (instance, formulation, solver) and tabulate accuracy and time",
         description=(
-            "Solve every (instance, formulation, solver option set) and write study.csv "
-            "(and study.parquet with pyarrow), summary.csv, notes.txt and study.png to --out. "
-            "Instances are models/ files or names, or garnet:N:M[:SEED] (a seeded random "
-            "MDP with N states and a random partition into M sets)."
+            "Solve every (instance, formulation, solver option set) and write to --out: "
+            "study.csv (one row per solve; study.parquet with pyarrow), summary.csv (per "
+            "problem), solvers.csv (per solver: status counts, shifted geometric means of "
+            "time), profile_time.png and profile_accuracy.png (Dolan-More performance "
+            "profiles, failures unsolved), study.png, notes.txt and metadata.json (versions, "
+            "machine, command line). Instances are models/ files or names, or "
+            "garnet:N:M[:SEED] (a seeded random MDP with N states and a random partition into "
+            "M sets). Solvers: every LP-capable solver cvxpy finds installed."
         ),
     )
     p.add_argument(
@@ -62,6 +67,23 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         "it (default %(default)g)",
     )
     p.add_argument(
+        "--time-limit",
+        type=positive_float,
+        default=None,
+        metavar="SECONDS",
+        help="per solve, in each solver's own option; a solve that uses it up has status "
+        "time_limit and keeps its point and certified error (default: none)",
+    )
+    p.add_argument(
+        "--shift",
+        type=nonnegative_float,
+        nargs="+",
+        default=list(DEFAULT_SHIFTS),
+        metavar="SECONDS",
+        help="shifts of the shifted geometric means of time (default: %(default)s: "
+        "Mittelmann's 10 s, and 0.01 s for sub-second solves)",
+    )
+    p.add_argument(
         "--out",
         default="compare-out",
         metavar="DIR",
@@ -75,10 +97,21 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         "--scheduler",
         default=None,
         metavar="ADDRESS",
-        help="run on an existing Dask cluster, e.g. tcp://127.0.0.1:8786 (pip install "
-        "'lpbounds[study]')",
+        help="run through Dask: an existing cluster (tcp://127.0.0.1:8786) or a local "
+        "scheduler (synchronous, threads, processes); pip install 'lpbounds[study]'",
     )
     p.set_defaults(func=run)
+
+
+def nonnegative_float(text: str) -> float:
+    """An argparse type: a finite number >= 0 (a shift may be 0: the plain geometric mean)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0; got {text}")
+    return value
 
 
 def _fmt(x: object, spec: str) -> str:
@@ -104,8 +137,13 @@ _COLUMNS: tuple[tuple[str, str], ...] = (
 )
 
 
-def _instance_table(instance: str, rows: Any) -> Table:
-    """The summary rows of one instance, as a table at most 100 columns wide."""
+#: Statuses whose row note is printed under the table (why it failed, what the limit kept).
+_NOTED = ("infeasible", "unbounded", "solver_error", "time_limit")
+
+
+def _instance_table(instance: str, rows: Any) -> tuple[Table, list[str]]:
+    """The summary rows of one instance, as a table at most 100 columns wide, and the
+    footnotes of its failed and time-limited rows (``[k] LP solver: note``)."""
     table = Table(
         title=Text(instance, "bold"),
         title_justify="left",
@@ -117,11 +155,16 @@ def _instance_table(instance: str, rows: Any) -> Table:
         # only the solver configuration folds: a status is read whole ("inaccurate")
         text = col == "solver"
         table.add_column(col, justify=just, no_wrap=not text, overflow="fold")  # type: ignore[arg-type]
+    notes: list[str] = []
     for row in rows.itertuples(index=False):
+        status = str(row.status)
+        if any(s in status.split(",") for s in _NOTED) and str(row.note or "") not in ("", "nan"):
+            notes.append(f"[{len(notes) + 1}] {row.formulation} {row.config}: {row.note}")
+            status += f" [{len(notes)}]"
         table.add_row(
             Text(str(row.formulation)),  # Text: no markup or emoji (":100:" is an emoji code)
             Text(str(row.config)),
-            Text(str(row.status)),
+            Text(status),
             _fmt(row.objective, ".8g"),
             _fmt(row.certified_error, ".1e"),
             "yes" if row.accurate and row.status == "optimal" else "[red]no[/red]",
@@ -131,6 +174,38 @@ def _instance_table(instance: str, rows: Any) -> Table:
             _fmt(row.solve_seconds, ".3f"),
             _fmt(row.iterations, ".0f"),
         )
+    return table, notes
+
+
+def _solver_table(summary: Any, shifts: list[float]) -> Table:
+    """Per solver configuration: status counts and shifted geometric means (100 columns)."""
+    from ..study_report import sgm_column
+
+    table = Table(
+        title=Text("per solver (solved = certified within the accuracy)", "bold"),
+        title_justify="left",
+        box=box.SIMPLE_HEAD,
+        padding=(0, 1, 0, 0),
+        show_edge=False,
+    )
+    table.add_column("solver", no_wrap=False, overflow="fold")
+    table.add_column("backend", no_wrap=False, overflow="fold", max_width=26)
+    for col in ("solved", "opt", "inacc", "t.lim", "lim", "fail"):
+        table.add_column(col, justify="right", no_wrap=True)
+    for shift in shifts:
+        table.add_column(f"sgm {shift:g}s", justify="right", no_wrap=True)
+    for r in summary.to_dict("records"):
+        table.add_row(
+            Text(str(r["config"])),
+            Text(str(r["backend"])),
+            f"{r['solved']}/{r['problems']}",
+            str(r["optimal"]),
+            str(r["inaccurate"]),
+            str(r["time_limit"]),
+            str(r["other_limit"]),
+            str(r["failed"]),
+            *(_fmt(r[sgm_column(s)], ".4f") for s in shifts),
+        )
     return table
 
 
@@ -139,8 +214,12 @@ COMPARE_FILES: tuple[str, ...] = (
     "study.csv",
     "study.parquet",
     "summary.csv",
+    "solvers.csv",
     "notes.txt",
     "study.png",
+    "profile_time.png",
+    "profile_accuracy.png",
+    "metadata.json",
     MANIFEST,
 )
 
@@ -161,6 +240,7 @@ def run(args: argparse.Namespace) -> int:
             args.solvers,
             repeat=args.repeat,
             accuracy=args.accuracy,
+            time_limit=args.time_limit,
             jobs=args.jobs,
             scheduler=args.scheduler,
             progress=cb,
@@ -172,18 +252,34 @@ def run(args: argparse.Namespace) -> int:
         Text(f"lpbounds compare: {len(result.frame)} solves in {result.seconds:.1f} s", "bold")
     )
     for instance, rows in summary.groupby("instance", sort=False):
-        print_table(_instance_table(str(instance), rows))
+        table, footnotes = _instance_table(str(instance), rows)
+        print_table(table)
+        for line in footnotes:
+            console.print(Text(line))
     console.print(
         "cert.err = certified bound on max |LP values - exact optimum| from the returned "
         f"point alone; ok = status optimal and cert.err <= {args.accuracy:g} * "
         "max|R|/(1-lambda); max dev = max |LP values - exact fixed point| (exact DP); "
         "resid = primal residual; comp s = cvxpy's compile time"
     )
+    shifts = list(dict.fromkeys(args.shift))
+    print_table(_solver_table(result.solver_summary(shifts), shifts))
+    charged = f"the time limit ({args.time_limit:g} s)" if args.time_limit else "the longest solve"
+    console.print(
+        "counts are solves: opt(imal), inacc(urate), t.lim (time limit), lim (other limits), "
+        f"fail (no point); sgm = shifted geometric mean of solve time in s, an unsolved "
+        f"problem charged {charged}; profiles in profile_time.png and profile_accuracy.png"
+    )
     for note in result.notes:
         log.warning("note: %s", note)
     target = AtomicDirectory(args.out, replaceable=COMPARE_FILES)
     with target as tmp:
-        paths = save_study(result, tmp)
+        paths = save_study(
+            result,
+            tmp,
+            shifts=shifts,
+            command_line=["lpbounds", *getattr(args, "argv", sys.argv[1:])],
+        )
         out = target.commit({"instances": sorted(set(summary["instance"].astype(str)))})
     console.print(f"wrote {out}: " + ", ".join(p.name for p in paths.values()) + ", manifest.json")
     return 0
