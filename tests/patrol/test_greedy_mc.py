@@ -28,6 +28,7 @@ from lpbounds.patrol.greedy_mc import (
     greedy_value_mc,
     partition_bounds,
     reward_absmax,
+    table1_markdown,
     truncation_bound,
 )
 from lpbounds.patrol.instance import params_from_instance
@@ -166,6 +167,12 @@ def test_monte_carlo_interval_covers_exact_value(solved):
     np.testing.assert_array_equal(
         est.starts[:2], pm.encode([0, 3], [1, 1], [0, 0], np.zeros((2, 2)))
     )
+    summary = est.summary()
+    assert summary["contradicts_upper"] == 0 and len(summary["rows"]) == 40
+    assert (
+        summary["rows"][0]["start"] == "station 1 empty" and summary["rows"][2]["start"] == "random"
+    )
+    assert est.markdown().count("\n") == 41
 
 
 def test_monte_carlo_is_reproducible_and_seeded(solved):
@@ -199,6 +206,8 @@ def test_greedy_table1_pools_the_seeds(solved):
     assert tab.statistics.worst_delay == delays.max()
     assert tab.statistics.n_steps == 8000 and tab.seeds == [1, 2]
     assert 0 < tab.visited_states <= pm.n_states
+    assert tab.summary()["worst_delay"] == delays.max()
+    assert f"| {delays.mean():.2f} (" in table1_markdown({"small": tab})
 
 
 @pytest.mark.parametrize(

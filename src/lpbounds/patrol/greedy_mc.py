@@ -72,6 +72,7 @@ __all__ = [
     "GreedyTable1",
     "GreedyValueEstimate",
     "PartitionBounds",
+    "default_horizon",
     "default_starts",
     "greedy_actions",
     "greedy_simulate",
@@ -79,6 +80,7 @@ __all__ = [
     "greedy_value_mc",
     "partition_bounds",
     "reward_absmax",
+    "table1_markdown",
     "truncation_bound",
 ]
 
@@ -426,6 +428,9 @@ class GreedyValueEstimate:
     --------------------------------------------
     starts : ndarray of int64
         Start state indices; ``partitions`` their partition indices.
+    start_labels : tuple of str
+        ``"station k empty"`` (``l = stations[k-1], w = +1, d = 0, tau = 0``), ``"random"``
+        (:func:`default_starts`) or ``"given"``.
     mean : ndarray
         ``V_hat(x)``: the mean truncated discounted return over ``paths`` paths.
     std : ndarray
@@ -451,6 +456,7 @@ class GreedyValueEstimate:
     """
 
     starts: np.ndarray
+    start_labels: tuple[str, ...]
     partitions: np.ndarray
     mean: np.ndarray
     std: np.ndarray
@@ -479,6 +485,7 @@ class GreedyValueEstimate:
         out = []
         for i in range(self.n_starts):
             row: dict[str, Any] = {
+                "start": self.start_labels[i],
                 "state": int(self.starts[i]),
                 "partition": int(self.partitions[i]),
             }
@@ -486,14 +493,64 @@ class GreedyValueEstimate:
             out.append(row)
         return out
 
+    def summary(self) -> dict[str, Any]:
+        """Plain numbers for JSON: the settings, the extremes and :meth:`rows`.
 
-def _start_states(params: PatrolParams, starts: Any, seed: int) -> np.ndarray:
-    if starts is None:
-        return default_starts(params, seed=seed)
-    if isinstance(starts, (int, np.integer)) and not isinstance(starts, bool):
-        n = check_int("starts", starts, lo=params.m)
-        return default_starts(params, n_random=n - params.m, seed=seed)
-    return _states(params, starts, "starts")
+        ``contradicts_upper`` counts starts whose interval lies wholly above
+        ``v* + err(v*)`` (impossible if ``V_pis <= V* <= v*``: a failed interval or a
+        wrong bound), ``below_lower`` those wholly below ``w*`` (``w* <= V_pis`` holds
+        when the lifted ``w*`` is a subsolution, as the paper's chain states; a count,
+        not an error).
+        """
+        return {
+            "n_starts": self.n_starts,
+            "paths": self.paths,
+            "horizon": self.horizon,
+            "level": self.level,
+            "interval": self.interval,
+            "truncation": self.truncation,
+            "upper_error": self.upper_error,
+            "seed": self.seed,
+            "seconds": self.seconds,
+            "max_half_width": float(self.half_width.max()),
+            "gap_bound_min": float(self.gap_bound.min()),
+            "gap_bound_max": float(self.gap_bound.max()),
+            "bound_gap_max": float((self.upper - self.lower).max()),
+            "contradicts_upper": int((self.ci_low > self.upper + self.upper_error).sum()),
+            "below_lower": int((self.ci_high < self.lower).sum()),
+            "rows": self.rows(),
+        }
+
+    def markdown(self) -> str:
+        """The per-start table (Markdown): ``w*``, ``V_hat +- half-width``, ``v*``, the
+        bound gap and the statistical certificate."""
+        lines = [
+            f"| start | state | w*(x) | V_pis(x): mean +- {self.level:.0%} t half-width "
+            "| v*(x) | v* - w* | V* - V_pis <= |",
+            "|---|---:|---:|---:|---:|---:|---:|",
+        ]
+        for r in self.rows():
+            lines.append(
+                f"| {r['start']} | {r['state']:,} | {r['lower']:.5f} | {r['mean']:.5f} +- "
+                f"{r['half_width']:.5f} | {r['upper']:.5f} | {r['upper'] - r['lower']:.5f} "
+                f"| {r['gap_bound']:.5f} |"
+            )
+        return "\n".join(lines)
+
+
+def _start_states(
+    params: PatrolParams, starts: Any, seed: int
+) -> tuple[np.ndarray, tuple[str, ...]]:
+    """The start states of :func:`greedy_value_mc` and their labels."""
+    if starts is not None and not (
+        isinstance(starts, (int, np.integer)) and not isinstance(starts, bool)
+    ):
+        xs = _states(params, starts, "starts")
+        return xs, ("given",) * xs.size
+    n = 12 + params.m if starts is None else check_int("starts", starts, lo=params.m)
+    xs = default_starts(params, n_random=n - params.m, seed=seed)
+    labels = [f"station {k + 1} empty" for k in range(params.m)] + ["random"] * (n - params.m)
+    return xs, tuple(labels)
 
 
 def greedy_value_mc(
@@ -550,7 +607,7 @@ def greedy_value_mc(
     horizon = default_horizon(params) if horizon is None else check_int("horizon", horizon, lo=1)
     level = check_real("level", level, lo=0.0, hi=1.0, lo_open=True, hi_open=True)
     upper_error = check_real("upper_error", upper_error, lo=0.0)
-    xs = _start_states(params, starts, seed)
+    xs, labels = _start_states(params, starts, seed)
     k = _Kernel.of(params)
     p0 = float(k.probs[0])
     returns = np.empty((xs.size, paths))
@@ -560,22 +617,24 @@ def greedy_value_mc(
         y = alert_sequence(paths * horizon, p0, params.m, sub).reshape(paths, horizon)
         _returns_kernel(int(x), y, lo, k.args(), returns[i])
     seconds = time.perf_counter() - t0
-    return _estimate(params, xs, returns, lo, up, upper_error, horizon, level, seed, seconds)
+    return _estimate(
+        params, xs, labels, returns, (lo, up, upper_error), horizon, level, seed, seconds
+    )
 
 
 def _estimate(
     params: PatrolParams,
     xs: np.ndarray,
+    labels: tuple[str, ...],
     returns: np.ndarray,
-    lo: np.ndarray,
-    up: np.ndarray,
-    upper_error: float,
+    bounds: tuple[np.ndarray, np.ndarray, float],
     horizon: int,
     level: float,
     seed: int,
     seconds: float,
 ) -> GreedyValueEstimate:
     """Means, Student's t intervals widened by the truncation bound, and the certificate."""
+    lo, up, upper_error = bounds
     paths = returns.shape[1]
     mean = returns.mean(axis=1)
     std = returns.std(axis=1, ddof=1)
@@ -586,6 +645,7 @@ def _estimate(
     ci_low = mean - half - trunc
     return GreedyValueEstimate(
         starts=xs,
+        start_labels=labels,
         partitions=parts,
         mean=mean,
         std=std,
@@ -738,6 +798,46 @@ class GreedyTable1:
     steps: int
     visited_states: int
     seconds: float
+
+    def summary(self) -> dict[str, Any]:
+        """Table 1's numbers and the counts behind them, for JSON."""
+        s = self.statistics
+        keys = (
+            "mean_loiters",
+            "mean_delay",
+            "worst_delay",
+            "mean_delay_plus_one",
+            "worst_delay_plus_one",
+            "mean_delay_capped",
+            "worst_delay_capped",
+            "std_mean_delay",
+            "std_mean_loiters",
+            "n_arrivals",
+            "n_serviced",
+            "mismatches",
+        )
+        out: dict[str, Any] = {k: getattr(s, k) for k in keys}
+        out.update(seeds=self.seeds, steps=self.steps, visited_states=self.visited_states)
+        out["seconds"] = self.seconds
+        return out
+
+
+def table1_markdown(tables: dict[str, GreedyTable1]) -> str:
+    """Table 1 rows of ``pi_s`` (Markdown), one per named size, with the 4-station
+    conventions: delay to the first loiter, uncapped; in brackets to its end."""
+    lines = [
+        "| instance | mean loiters | mean delay (+1) | worst delay (+1) | alerts serviced "
+        "| states visited |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    for name, t in tables.items():
+        s = t.statistics
+        lines.append(
+            f"| {name} | {s.mean_loiters:.2f} | {s.mean_delay:.2f} ({s.mean_delay_plus_one:.2f}) "
+            f"| {s.worst_delay} ({s.worst_delay_plus_one}) | {s.n_serviced:,} "
+            f"| {t.visited_states:,} |"
+        )
+    return "\n".join(lines)
 
 
 def greedy_table1(
