@@ -10,9 +10,12 @@ A study is the cross product of
   instance it does not apply to) is skipped with a note;
 * solver configurations: a cvxpy solver name with a named option set, written
   ``SOLVER`` (all option sets of that solver) or ``SOLVER:SET``, e.g. ``HIGHS:ipm``.
-  HiGHS contributes ``simplex``, ``ipm`` (with crossover), ``ipm-nox`` (without) and
-  ``pdlp`` where the installed HiGHS accepts that ``solver`` option; every other
-  installed LP solver runs with its defaults. Missing solvers are skipped with a note.
+  By default every LP-capable solver cvxpy finds installed, read from cvxpy's solver
+  classes (:func:`lpbounds.solver_catalog.lp_capable_solvers`), each with its backend
+  named (``SCIPY`` is HiGHS inside scipy) and its option sets
+  (:data:`~lpbounds.solver_catalog.OPTION_SETS`: HiGHS ``simplex``, ``ipm``, ``ipm-nox``,
+  ``pdlp``; Clarabel ``default`` and ``tight``; others ``default``). Missing solvers are
+  skipped with a note.
 
 Each solve is done on a freshly built formulation (so cvxpy's compile time is measured
 every time) with ``raise_on_failure=False``, and gives one row of a
@@ -27,7 +30,13 @@ status keeps a point and its certified error is within the requested ``accuracy`
 relative to ``max|R| / (1 - lambda)`` (default
 :data:`~lpbounds.tolerances.LP_CERT_RTOL`). The reference is computed by exact DP to the
 residual tolerance ``DP_RTOL * max|R| / (1 - lambda)``; its error bound is reported in
-``reference_error_bound``.
+``reference_error_bound``. With ``time_limit`` each solve gets that many seconds in its
+solver's own keyword; a solve that used it up without an OPTIMAL point is ``time_limit``,
+with its point and certified error kept. An "infeasible" answer (the LPs are feasible by
+construction) gets a note with the exact fixed point's row violation.
+
+What a study writes (per-solver counts, shifted geometric means, performance profiles,
+metadata) is in :mod:`lpbounds.study_report`.
 
 Bad input fails before anything is solved (:class:`~lpbounds.errors.ValidationError`):
 an instance file that does not exist, a solver name no one knows (a known solver that
@@ -35,8 +44,9 @@ is not installed is skipped with a note naming its install command), an unknown 
 set, or a study with no solver left to run.
 
 Solves run in parallel processes (:class:`concurrent.futures.ProcessPoolExecutor`) by
-default, or on an existing Dask cluster (``scheduler="tcp://host:8786"``; requires the
-optional ``study`` extra, ``pip install lpbounds[study]``). Times measured while other
+default, or through Dask (a local scheduler, ``scheduler="threads"``, or an existing
+cluster, ``scheduler="tcp://host:8786"``; requires the optional ``study`` extra, ``pip
+install lpbounds[study]``). Times measured while other
 solves run on the same cores are noisy: use ``jobs=1`` for timings you want to quote.
 """
 
@@ -602,7 +612,7 @@ def _solve_once(task: Task, case: Case, exact: np.ndarray, rec: dict[str, Any]) 
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             res = form.solve(cfg.solver, accuracy=task.accuracy, raise_on_failure=False, **options)
-    except Exception as exc:  # noqa: BLE001 - a third-party solver's crash is a row, not an abort
+    except Exception as exc:  # a third-party solver's crash is a row, not an abort
         what = str(exc) if isinstance(exc, LPBoundsError) else f"{type(exc).__name__}: {exc}"
         rec.update(status=Status.SOLVER_ERROR.value, accurate=False, note=what)
         rec["certified_error"] = rec["rel_error"] = math.inf
