@@ -418,3 +418,15 @@ def test_dask_local_scheduler_matches_local(scheduler):
     assert a.index.equals(b.index) and len(a) == 4
     assert np.allclose(a.to_numpy(), b.to_numpy(), rtol=1e-9, atol=0)
     assert res.params["scheduler"] == scheduler
+
+
+@pytest.mark.parametrize(
+    ("flag", "value"), [("--time-limit", "0"), ("--time-limit", "nan"), ("--shift", "-1")]
+)
+def test_cli_rejects_bad_limits_and_shifts(capsys, tmp_path, flag, value):
+    out = tmp_path / "cmp"
+    with pytest.raises(SystemExit) as exc:
+        main(["compare", "garnet:20:4", flag, value, "--out", str(out)])
+    assert exc.value.code == 2
+    assert f"argument {flag}" in capsys.readouterr().err
+    assert not out.exists()
