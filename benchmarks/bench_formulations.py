@@ -209,15 +209,19 @@ def bench_cvxpy_vs_highspy(garnet_states: int, garnet_partitions: int, rounds: i
         del form
     lines += [
         "",
-        "Why the tax was there and what is left: cvxpy's cone form is `A_d x <= b_d`, so "
-        "`A x >= b` reached HiGHS as `-inf <= -A x <= -b`. The LP is the same, but HiGHS' "
-        "interior point method (IPX) is not symmetric in the sense of the rows and took "
-        "20-40 % more iterations on it (the last column but one). "
-        "`lpbounds.formulations._highs.CvxpyHighs`, a cvxpy solver adapter that Formulation "
-        "uses for HIGHS, hands HiGHS `A x >= b` again: the cvxpy path now runs HiGHS on "
-        "exactly highspy's LP (same iteration counts). What remains is cvxpy's compilation "
-        "(in brackets: canonicalisation and matrix stuffing, about 1-2 us per nonzero of A, "
-        "paid once per formulation object: cvxpy caches it for later solves).",
+        "Where the tax came from and what is left. cvxpy's cone form is `A_d x <= b_d`, so "
+        "`A x >= b` reached HiGHS as `-inf <= -A x <= -b`: the same LP, but HiGHS' interior "
+        "point method (IPX) is sensitive to the sense of the rows, and the iteration count "
+        "changes with it in either direction (last column but one: 42 against 30 on UBLP, "
+        "38 against 30 on LBLP, but 27 against 42 on RLP; on garnets it does not change). "
+        "Formulation now solves `solver='HIGHS'` through "
+        "`lpbounds.formulations._highs.CvxpyHighs`, a subclass of cvxpy's HiGHS interface "
+        "that hands HiGHS `A x >= b` as highspy gets it: both backends run HiGHS on the same "
+        "LP (same iterations, same point), so the ratio measures only what cvxpy adds, its "
+        "compilation (in brackets; cvxpy's COO canonicalisation backend, about 1-2 us per "
+        "nonzero of A, paid once per formulation object since cvxpy caches it). Which row "
+        "sense is faster for IPX is a property of the instance, not of cvxpy: "
+        "`highs_lp` keeps `A x >= b`, the form the MPS export writes.",
         "",
     ]
     return lines

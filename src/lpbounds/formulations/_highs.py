@@ -210,11 +210,12 @@ class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
 
     cvxpy's cone form is ``A_d x <= b_d`` (``A x >= b`` becomes ``-A x <= -b``), and its
     HiGHS interface hands HiGHS exactly that: rows ``-inf <= -A x <= -b``. The LP is the
-    same, but HiGHS' interior point method (IPX) is not symmetric in the row sense: on the
-    patrol UBLP it takes 42 iterations on the ``<=`` rows and 30 on ``A x >= b`` (LBLP,
-    RLP and ELP alike), which was most of "the cvxpy tax". This adapter writes the rows as
-    ``-A_d x >= -b_d`` (``A x >= b`` again, equality rows unchanged) and maps the row
-    duals back to cvxpy's sign, so ``constraint.dual_value`` is as with ``solver="HIGHS"``.
+    same, but HiGHS' interior point method (IPX) is sensitive to the sense of the rows: on
+    the paper's UBLP it takes 42 iterations on the ``<=`` rows and 30 on ``A x >= b``
+    (on its RLP 27 and 42: the direction depends on the instance). This adapter writes the
+    rows as ``-A_d x >= -b_d`` (``A x >= b`` again, equality rows unchanged), so the cvxpy
+    path and ``backend="highspy"`` run HiGHS on the same LP, and maps the row duals back
+    to cvxpy's sign, so ``constraint.dual_value`` is as with ``solver="HIGHS"``.
     LP only (no integer variables); :meth:`model_status` keeps HiGHS' own status, which
     cvxpy folds into ``USER_LIMIT`` for every limit.
     """
