@@ -240,3 +240,22 @@ def test_bad_outcomes_and_start():
         greedy_simulate(params, np.zeros(176), np.array([0, 1]), start=-1)
     with pytest.raises(ValidationError, match="seeds"):
         greedy_table1(params, np.zeros(176), seeds=[])
+
+
+@pytest.mark.slow
+def test_paper_instance_greedy_and_table1_equal_the_mdp_path():
+    """On the paper's 2,048,000 states: pi_s on the fly equals greedy_policy everywhere, and
+    one seed of Table 1 equals simulate on the MDP's successor table."""
+    params = params_from_instance(load_instance("patrol-paper"))
+    pm = PatrolModel(params)
+    mdp = pm.mdp()
+    b = partition_bounds(params)
+    want = greedy_policy(mdp, b.lower[pm.partition().labels])
+    got = greedy_actions(params, b.lower, np.arange(params.n_states))
+    assert np.array_equal(got, want), f"{int((got != want).sum())} states differ"
+    y = alert_sequence(60_000, params.alert_probabilities()[0], params.m, 1)
+    mine = greedy_simulate(params, b.lower, y, seed=1)
+    ref = simulate(pm, want, y, seed=1)
+    for f in dataclasses.fields(ref):
+        if f.name != "policy_name":
+            np.testing.assert_array_equal(getattr(mine, f.name), getattr(ref, f.name), f.name)

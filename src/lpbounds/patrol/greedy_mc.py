@@ -424,8 +424,10 @@ def greedy_actions(params: PatrolParams, lower: Any, states: Any) -> np.ndarray:
 class GreedyValueEstimate:
     """Monte Carlo value of ``pi_s`` from a set of start states, beside the bounds.
 
-    Attributes (arrays have one entry per start)
-    --------------------------------------------
+    The arrays have one entry per start state.
+
+    Attributes
+    ----------
     starts : ndarray of int64
         Start state indices; ``partitions`` their partition indices.
     start_labels : tuple of str
