@@ -439,12 +439,28 @@ class BellmanRows:
         return float(lo), float(hi)
 
     def _sweep_policy(
-        self, sel: np.ndarray, v: np.ndarray, out: np.ndarray, nchunks: int
+        self,
+        sel: np.ndarray,
+        v: np.ndarray,
+        out: np.ndarray,
+        nchunks: int,
+        reward: np.ndarray | None = None,
     ) -> tuple[float, float]:
+        rew = self.reward if reward is None else reward
         lo, hi = self._k().policy_sweep_stats(
-            sel, self.reward, self.targets, self.probs, self.discount, v, out, nchunks
+            sel, rew, self.targets, self.probs, self.discount, v, out, nchunks
         )
         return float(lo), float(hi)
+
+    def zero_rewards(self) -> np.ndarray:
+        """Zeros in the layout of the rewards: ``_sweep_policy(..., reward=zeros)`` computes
+        ``discount * P_pi v`` (the product of inexact policy iteration, :mod:`lpbounds.dp`)."""
+        return np.zeros(self.n_rows)
+
+    def self_loops(self, sel: np.ndarray) -> np.ndarray:
+        """``P_pi(i, i)``: the probability that row ``sel[i]`` stays at its owner ``i``."""
+        stay = self.targets[sel] == np.arange(self.n_vars)[:, None]
+        return (np.asarray(self.probs)[sel] * stay).sum(axis=1)
 
     def _sweep_maxmin(self, v: np.ndarray, out: np.ndarray, arg: np.ndarray) -> tuple[float, float]:
         self._k().bellman_maxmin(
@@ -694,7 +710,10 @@ class PostDecisionRows:
         out: np.ndarray,
         nchunks: int,
         w: np.ndarray | None = None,
+        reward: np.ndarray | None = None,
     ) -> tuple[float, float]:
+        """One evaluation sweep of the actions ``act``; ``reward`` replaces the stored
+        rewards (the table when they are coded: see :meth:`zero_rewards`)."""
         w = self.new_work() if w is None else w
         kern = self._k()
         kern.ps_expect(self.outcomes, self.probs, v, w)
@@ -702,7 +721,7 @@ class PostDecisionRows:
             lo, hi = kern.ps_policy_stats_coded(
                 self.first,
                 self.reward_codes,
-                self.reward_table,
+                self.reward_table if reward is None else reward,
                 act,
                 w,
                 self.discount,
@@ -712,9 +731,29 @@ class PostDecisionRows:
             )
         else:
             lo, hi = kern.ps_policy_stats(
-                self.first, self.reward, act, w, self.discount, v, out, nchunks
+                self.first,
+                self.reward if reward is None else reward,
+                act,
+                w,
+                self.discount,
+                v,
+                out,
+                nchunks,
             )
         return float(lo), float(hi)
+
+    def zero_rewards(self) -> np.ndarray:
+        """Zeros in the layout :meth:`_sweep_policy` reads (the code table when the rewards
+        are coded): with them a sweep computes ``discount * P_pi v``."""
+        if self.reward_table is not None:
+            return np.zeros_like(self.reward_table)
+        return np.zeros(self.reward.shape)
+
+    def self_loops(self, act: np.ndarray) -> np.ndarray:
+        """``P_pi(x, x)`` for the actions ``act``: the probability of staying at ``x``."""
+        x = np.arange(self.n_vars)
+        stay = self.outcomes[self.first[x, act]] == x[:, None]
+        return (self.probs[None, :] * stay).sum(axis=1)
 
     def rows_of(self, act: np.ndarray) -> np.ndarray:
         """Row indices (those of :meth:`BellmanRows.from_mdp`) of the pairs ``(x, act[x])``."""

@@ -41,7 +41,7 @@ from ._common import (
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser("solve", help="solve an instance exactly (VI / PI / MPI)")
     add_model_argument(p)
-    p.add_argument("--method", choices=("mpi", "vi", "pi"), default="mpi")
+    p.add_argument("--method", choices=("mpi", "vi", "pi", "ipi"), default="mpi")
     p.add_argument("--tol", type=positive_float, default=None, help="residual tolerance (absolute)")
     p.add_argument("--max-iter", type=positive_int, default=100_000)
     p.add_argument("--json", metavar="PATH", help="also write the statistics as JSON")
