@@ -32,6 +32,18 @@ the statistical certificate, at that level for each start separately:
 The intervals hold for each start at the stated level, not simultaneously (for that,
 pass ``level = 1 - 0.05 / n_starts``, Bonferroni).
 
+Control variate (default on). Each path's return has subtracted
+
+    ``C = sum_{t<H} lambda^(t+1) (w(x_(t+1)) - sum_l p_l w(f(x_t, u_t, Y_l)))``,
+
+``w = w*`` lifted. Given the path up to ``t``, each term has mean 0 (the sum is the
+expectation of ``w(x_(t+1))``; the greedy step computes it anyway), so ``E[G_H - C] =
+E[G_H]``: the same estimand, the same truncation bound, and the paths stay independent,
+so the t interval applies unchanged. ``G_H - C`` telescopes to ``w(x_0)`` plus the
+discounted one-step errors ``R + lambda E w(x') - w(x)`` along the path (plus the end
+term ``lambda^H w(x_H)``), whose spread is that of ``w``'s Bellman residual, not of the
+alert stream: much smaller when ``w*`` is close to ``V_pis``.
+
 Table 1 (:func:`greedy_table1`)
 -------------------------------
 Long trajectories of ``pi_s`` with the alert sequences of the 4-station run (same seeds,
@@ -60,7 +72,7 @@ from ..dp import solve_exact
 from ..errors import ConsistencyError, ValidationError
 from ..mdp import FiniteMDP
 from ..tolerances import GREEDY_TIE_RTOL
-from ..validation import check_int, check_real, check_vector
+from ..validation import check_bool, check_int, check_real, check_vector
 from .bounds import patrol_rows
 from .model import ACTION_NAMES, PatrolModel, _decode_kernel, _successor_kernel
 from .params import PatrolParams
@@ -178,7 +190,8 @@ class _Kernel:
 def _buffers(m):  # pragma: no cover - compiled
     """Per-trajectory work arrays: the state ``cur`` (l, w, d) and ``tau`` (1, m); per
     action ``a`` the successor indices ``succ[a, 0]`` (by outcome), the components of the
-    no-alert successor ``nl[a], nw[a], nd[a], ntau[a, 0]``, and the Q-values ``q``."""
+    no-alert successor ``nl[a], nw[a], nd[a], ntau[a, 0]``, the Q-values ``q``, the
+    successors' values ``wn[a, y]`` and their expectation ``ev[a]``."""
     cur = np.zeros(3, np.int64)
     tau = np.zeros((1, m), np.int16)
     succ = np.zeros((3, 1, m + 1), np.int64)
@@ -187,7 +200,9 @@ def _buffers(m):  # pragma: no cover - compiled
     nd = np.zeros(3, np.int64)
     ntau = np.zeros((3, 1, m), np.int16)
     q = np.zeros(3)
-    return cur, tau, succ, nl, nw, nd, ntau, q
+    wn = np.zeros((3, m + 1))
+    ev = np.zeros(3)
+    return cur, tau, succ, nl, nw, nd, ntau, q, wn, ev
 
 
 @njit(cache=True, nogil=True)
@@ -195,7 +210,7 @@ def _decode_one(x, a, mt, buf):  # pragma: no cover - compiled
     """Decode state ``x`` into action ``a``'s successor slots (the model's decoder); it
     becomes ``succ[a, 0, 0]``."""
     cfg, stations = mt[0], mt[2]
-    _, tau, succ, nl, nw, nd, ntau, _ = buf
+    tau, succ, nl, nw, nd, ntau = buf[1], buf[2], buf[3], buf[4], buf[5], buf[6]
     succ[a, 0, 0] = x
     _decode_kernel(
         succ[a, 0, :1], cfg[4], cfg[3], tau.shape[1], cfg[1], stations, nl[a : a + 1],
@@ -221,7 +236,7 @@ def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
     ``taubar' = max(taubar, 1)``), and is the no-alert successor otherwise.
     """
     cfg, station_pos, w_travel, w_loiter, probs = mt[0], mt[1], mt[3], mt[4], mt[5]
-    cur, tau, succ, nl, nw, nd, ntau, _ = buf
+    cur, tau, succ, nl, nw, nd, ntau, _, wn, ev = buf
     m = tau.shape[1]
     n_nodes, big_d, gamma, radix, n_travel = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
     _successor_kernel(
@@ -238,7 +253,9 @@ def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
         part = key_index_kernel(
             nl[a], nw[a], nd[a], ay, tby, station_pos, n_nodes, big_d, gamma, cfg[5], cfg[6], m
         )
-        acc += probs[y] * lower[part]
+        wn[a, y] = lower[part]
+        acc += probs[y] * wn[a, y]
+    ev[a] = acc
     return mt[8] * acc
 
 
@@ -273,7 +290,7 @@ def _greedy_step(lower, mt, buf):  # pragma: no cover - compiled
 def _advance(a, y, buf):  # pragma: no cover - compiled
     """Move to the successor of action ``a`` under outcome ``y`` (``y = -1``: the decoded
     state itself); return its index."""
-    cur, tau, succ, nl, nw, nd, ntau, _ = buf
+    cur, tau, succ, nl, nw, nd, ntau = buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6]
     cur[0], cur[1], cur[2] = nl[a], nw[a], nd[a]
     tau[0, :] = ntau[a, 0, :]
     if y < 0:
@@ -293,20 +310,25 @@ def _actions_kernel(xs, lower, mt, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def _returns_kernel(x0, outcomes, lower, mt, out):  # pragma: no cover - compiled
-    """``out[p]``: the discounted return of path ``p`` from ``x0`` under ``outcomes[p]``."""
+def _returns_kernel(x0, outcomes, lower, mt, cv, out):  # pragma: no cover - compiled
+    """``out[p]``: the discounted return of path ``p`` from ``x0`` under ``outcomes[p]``,
+    minus (``cv``) the control variate ``sum_t lambda^(t+1) (w(x_(t+1)) - E_t w(x_(t+1)))``."""
     n_paths, horizon = outcomes.shape
     discount = mt[8]
     for p in prange(n_paths):
         buf = _buffers(mt[3].shape[0])
+        wn, ev = buf[8], buf[9]
         _set_state(x0, mt, buf)
         g = 0.0
         disc = 1.0
         for t in range(horizon):
             a, r = _greedy_step(lower, mt, buf)
+            y = outcomes[p, t]
             g += disc * r
+            if cv:
+                g -= disc * discount * (wn[a, y] - ev[a])
             disc *= discount
-            _advance(a, outcomes[p, t], buf)
+            _advance(a, y, buf)
         out[p] = g
 
 
@@ -447,12 +469,12 @@ class GreedyValueEstimate:
         ``v*(i(x))`` (UBLP, lifted); ``upper_error`` its certified error.
     lower : ndarray
         ``w*(i(x))`` (LBLP, lifted): ``pi_s``'s own lower bound, for comparison.
-    gap_bound : ndarray
-        ``v*(i(x)) + upper_error - ci_low``: at ``level``, ``V*(x) - V_pis(x)`` is at
-        most this (the statistical certificate).
     paths, horizon, level, seed : int, int, float, int
     interval : str
         ``"student-t"``.
+    control_variate : bool
+        Whether the returns had the control variate subtracted (``std`` is then the
+        standard deviation of the corrected returns).
     seconds : float
         Wall time of the simulation (compiled kernels; the first call also compiles).
     """
@@ -469,17 +491,23 @@ class GreedyValueEstimate:
     upper: np.ndarray
     upper_error: float
     lower: np.ndarray
-    gap_bound: np.ndarray
     paths: int
     horizon: int
     level: float
     seed: int
     interval: str
+    control_variate: bool
     seconds: float
 
     @property
     def n_starts(self) -> int:
         return int(self.starts.size)
+
+    @property
+    def gap_bound(self) -> np.ndarray:
+        """``v*(i(x)) + upper_error - ci_low``: at ``level``, ``V*(x) - V_pis(x)`` is at
+        most this (the statistical certificate)."""
+        return self.upper + self.upper_error - self.ci_low
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per start, for tables and JSON."""
@@ -561,11 +589,12 @@ def greedy_value_mc(
     upper: Any,
     *,
     starts: Any = None,
-    paths: int = 10_000,
+    paths: int = 4_000,
     horizon: int | None = None,
     level: float = 0.95,
     upper_error: float = 0.0,
     seed: int = 0,
+    control_variate: bool = True,
 ) -> GreedyValueEstimate:
     """Estimate ``V_pis`` by Monte Carlo and bound ``V* - V_pis`` with ``v*``.
 
@@ -580,7 +609,11 @@ def greedy_value_mc(
         12 seeded random states), an int ``n >= m`` for the ``m`` stations and
         ``n - m`` random states, or explicit state indices.
     paths : int
-        Independent paths per start (>= 2).
+        Independent paths per start (>= 2). The t interval needs enough paths to see
+        the rare events (alerts are rare at ``alpha = 1/60``, and the corrected returns
+        are nearly constant between them): on the 320-state instance, 95 % intervals
+        covered the exact value at 92.5 % of 80 starts with 1,500 paths and 96 % with
+        4,000 (the default).
     horizon : int, optional
         Steps per path; default :func:`default_horizon` (truncation error <= 1e-6).
     level : float
@@ -591,6 +624,10 @@ def greedy_value_mc(
     seed : int
         Seeds the random starts and, with the start's position, each start's alert
         stream (:func:`~lpbounds.patrol.simulation.alert_sequence`).
+    control_variate : bool
+        Subtract the zero-mean control variate built from ``lower`` (module docstring):
+        the same expectation, a far smaller variance when ``lower`` is close to
+        ``V_pis``. False gives the plain returns.
 
     Returns
     -------
@@ -609,6 +646,7 @@ def greedy_value_mc(
     horizon = default_horizon(params) if horizon is None else check_int("horizon", horizon, lo=1)
     level = check_real("level", level, lo=0.0, hi=1.0, lo_open=True, hi_open=True)
     upper_error = check_real("upper_error", upper_error, lo=0.0)
+    control_variate = check_bool("control_variate", control_variate)
     xs, labels = _start_states(params, starts, seed)
     k = _Kernel.of(params)
     p0 = float(k.probs[0])
@@ -617,55 +655,42 @@ def greedy_value_mc(
     for i, x in enumerate(xs):
         sub = int(np.random.SeedSequence([seed, i]).generate_state(1)[0])
         y = alert_sequence(paths * horizon, p0, params.m, sub).reshape(paths, horizon)
-        _returns_kernel(int(x), y, lo, k.args(), returns[i])
+        _returns_kernel(int(x), y, lo, k.args(), control_variate, returns[i])
     seconds = time.perf_counter() - t0
-    return _estimate(
-        params, xs, labels, returns, (lo, up, upper_error), horizon, level, seed, seconds
-    )
-
-
-def _estimate(
-    params: PatrolParams,
-    xs: np.ndarray,
-    labels: tuple[str, ...],
-    returns: np.ndarray,
-    bounds: tuple[np.ndarray, np.ndarray, float],
-    horizon: int,
-    level: float,
-    seed: int,
-    seconds: float,
-) -> GreedyValueEstimate:
-    """Means, Student's t intervals widened by the truncation bound, and the certificate."""
-    lo, up, upper_error = bounds
-    paths = returns.shape[1]
-    mean = returns.mean(axis=1)
-    std = returns.std(axis=1, ddof=1)
-    half = float(stats.t.ppf(0.5 + level / 2, paths - 1)) * std / math.sqrt(paths)
-    trunc = truncation_bound(params, horizon)
-    pm = PatrolModel(params)
-    parts = pm.state_partition(xs)
-    ci_low = mean - half - trunc
+    parts = PatrolModel(params).state_partition(xs)
     return GreedyValueEstimate(
         starts=xs,
         start_labels=labels,
         partitions=parts,
-        mean=mean,
-        std=std,
-        half_width=half,
-        truncation=trunc,
-        ci_low=ci_low,
-        ci_high=mean + half + trunc,
+        **_intervals(returns, level, truncation_bound(params, horizon)),
         upper=up[parts],
         upper_error=upper_error,
         lower=lo[parts],
-        gap_bound=up[parts] + upper_error - ci_low,
         paths=paths,
         horizon=horizon,
         level=level,
         seed=seed,
         interval="student-t",
+        control_variate=control_variate,
         seconds=seconds,
     )
+
+
+def _intervals(returns: np.ndarray, level: float, trunc: float) -> dict[str, Any]:
+    """Per row of ``returns``: mean, std, Student's t half-width, the interval widened by
+    the truncation bound ``trunc``."""
+    paths = returns.shape[1]
+    mean = returns.mean(axis=1)
+    std = returns.std(axis=1, ddof=1)
+    half = float(stats.t.ppf(0.5 + level / 2, paths - 1)) * std / math.sqrt(paths)
+    return {
+        "mean": mean,
+        "std": std,
+        "half_width": half,
+        "truncation": trunc,
+        "ci_low": mean - half - trunc,
+        "ci_high": mean + half + trunc,
+    }
 
 
 # ---------------------------------------------------------------------- Table 1
