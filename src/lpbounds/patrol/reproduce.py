@@ -125,6 +125,7 @@ OUTPUT_FILES: tuple[str, ...] = (
     "report.md",
     "manifest.json",
     "fig*.png",
+    "beyond.json",
 )
 #: Paper, Section 5: the example's counts.
 PAPER_COUNTS = {"n_states": 2_048_000, "n_partitions": 8_900}
@@ -873,6 +874,8 @@ def reproduce(
     figures: bool = True,
     progress: Any = None,
     n_examples: int = 10,
+    beyond: bool = False,
+    beyond_cache: str | Path = "out/beyond",
 ) -> Reproduction:
     """Reproduce the paper's patrol results on one instance; write them into ``out``.
 
@@ -909,6 +912,15 @@ def reproduce(
         Progress bars for every step.
     n_examples : int
         Violating states listed per check.
+    beyond : bool
+        Also run the study beyond the paper's size (:mod:`lpbounds.patrol.beyond`): exact
+        ``V*`` at 5 and 6 stations (matrix-free; the 4-station numbers are this run's),
+        the greedy policy by Monte Carlo at 6 and 8 stations, and a "Beyond the paper"
+        section of the report with ``beyond.json`` and a figure. Long (the 6-station V*
+        takes tens of minutes and about 15 GB).
+    beyond_cache : path
+        Where the 5- and 6-station results are kept between runs (reused when the
+        parameters are the same; the 6-station V* is checkpointed there).
 
     Returns
     -------
@@ -931,6 +943,8 @@ def reproduce(
     outdir = Path(out)
     target = AtomicDirectory(outdir, replaceable=OUTPUT_FILES)
     with target as tmp:
+        # the large sizes first, so that their memory is free before the MDP is built
+        bey_rows = _beyond_sizes(beyond_cache, tr) if beyond else []
         built, counts = build_model(params, tr)
         vs = solve_vstar(built, tr)
         bounds = solve_bounds(params, solver, tr)
@@ -965,7 +979,16 @@ def reproduce(
             **_timing(tr, t_start),
         )
         arrays = _arrays(built, vs, bounds, sp)
+        bey_lines: list[str] = []
+        if beyond:
+            bey_lines, bey_files = _beyond_section(
+                params, name, vs, bounds, sp, bey_rows, tmp, figures, tr
+            )
+            files.update(bey_files)
         files.update(write_outputs(summary, arrays, files, tmp, tr, t_start))
+        if bey_lines:
+            with open(files["report"], "a") as fh:
+                fh.write("\n" + "\n".join(bey_lines))
         checkpoint("commit")
         target.commit({"instance": name})
     files = {k: outdir / Path(p).relative_to(tmp) for k, p in files.items()}
@@ -973,6 +996,32 @@ def reproduce(
     return Reproduction(
         summary=to_dict(summary), out=outdir, files=files, arrays=arrays, result=summary
     )
+
+
+def _beyond_sizes(cache: str | Path, tr: Tracker) -> list[Any]:
+    """``--beyond``: the 5- and 6-station studies (cached in ``cache``)."""
+    from .beyond import run_sizes
+
+    return run_sizes((5, 6), cache, tr)
+
+
+def _beyond_section(
+    params: PatrolParams,
+    name: str,
+    vs: VStar,
+    bounds: Bounds,
+    sp: SandwichAndPolicy,
+    rows: list[Any],
+    folder: Path,
+    figures: bool,
+    tr: Tracker,
+) -> tuple[list[str], dict[str, Path]]:
+    """``--beyond``: this run's row, the Monte Carlo, ``beyond.json``, the figure, the text."""
+    from .beyond import from_reproduction, monte_carlo, write_beyond
+
+    here = from_reproduction(params, name, vs, bounds, sp, tr)
+    mc = monte_carlo(tr=tr)
+    return write_beyond(folder, [here, *rows], mc, figures)
 
 
 def _arrays(

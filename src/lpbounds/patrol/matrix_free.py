@@ -1,0 +1,955 @@
+r"""Matrix-free exact DP for the patrol model: sweeps that compute the dynamics on the fly.
+
+The array path (:meth:`PatrolModel.mdp` and :class:`lpbounds.rows.PostDecisionRows`)
+stores ``(m + 1)`` successors per state and action; at 6 stations (534,773,760 states)
+those arrays alone would take about 32 GB. The sweeps here store nothing per state but
+the value vectors: each state's components, its successors, its rewards and (for the
+bounds) its partition are computed from the state index inside compiled kernels, a block
+of states at a time, with the model's own encoding and dynamics
+(``model._decode_kernel``, ``model._successor_kernel``).
+
+Same numbers as the array path
+------------------------------
+Every Q-value is computed with the array path's arithmetic, in its order:
+``W = sum_l p_l v(g_l)`` accumulated from ``0.0`` over ``l = 0..m``, then
+``q = R_u(x) + lambda W`` with ``R_u(x)`` the float :meth:`PatrolModel.rewards` stores;
+the maximum keeps the first maximising action; a sweep returns the extremes of
+``T v - v``. :func:`solve_vstar` runs the iteration of :func:`lpbounds.solve_exact`
+(MPI with five evaluation sweeps, the Porteus shift carried as a scalar offset through
+:func:`lpbounds.dp._offset_step`, the default tolerance ``DP_RTOL max|R| / (1 -
+lambda)``), and :func:`evaluate_policy` that of :func:`lpbounds.evaluate_policy`'s
+iterative method, so both return the array path's vectors bit for bit
+(``tests/patrol/test_matrix_free.py`` checks it; ``benchmarks/bench_beyond.py`` on the
+paper's instance). Only the memory differs: the loops here keep two value vectors (the
+array path's loop also keeps the initial vector and forms ``u + c`` in a new one: four
+4.3 GB vectors at 6 stations), and the policy as int8.
+
+Certificate
+-----------
+``V*`` is certified as every exact-DP result is: the residual ``||T V - V||_inf`` is
+measured by a full max sweep on the returned vector and turned into
+:func:`lpbounds.tolerances.error_bound` (``(residual + rounding slack) / (1 - lambda)``);
+the status is :attr:`Status.OPTIMAL` when the residual reached the tolerance.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, cast
+
+import numpy as np
+from numba import njit, prange
+
+from ..dp import PolicyEvaluation, _offset_step, _threads_for
+from ..errors import ConvergenceError, ValidationError
+from ..status import Status
+from ..tolerances import DP_RTOL, dp_scale, error_bound
+from ..validation import check_int
+from .model import PatrolModel, _decode_kernel, _successor_kernel
+from .params import PatrolParams
+from .partitions import block_sizes, state_partition_kernel
+
+__all__ = [
+    "BLOCK",
+    "MatrixFreePatrol",
+    "MatrixFreeSolution",
+    "evaluate_policy",
+    "solve_vstar",
+]
+
+_OPTS: dict[str, Any] = {"cache": True, "nogil": True, "fastmath": False}
+
+#: States decoded together into a thread's buffers (small enough to stay in L1/L2).
+BLOCK: int = 512
+
+# indices into the integer geometry vector the kernels take
+_N, _M, _D, _G, _RADIX, _NTRAVEL, _EMPTY, _TBS, _LBS, _ROW = range(10)
+
+
+# ---------------------------------------------------------------------- kernels
+@njit(**_OPTS)
+def _buffers(block, m):  # pragma: no cover - compiled
+    """One thread's block buffers: decoded components ``l, w, d, tau``, the state indices
+    ``xs``, their compacted copies ``cl, cw, cd, ctau`` and index list ``sel``, and one
+    successor block per action."""
+    ints = np.empty((8, block), np.int64)
+    tau = np.empty((block, m), np.int16)
+    ctau = np.empty((block, m), np.int16)
+    succ = np.empty((3, block, m + 1), np.int64)
+    return ints, tau, ctau, succ
+
+
+@njit(**_OPTS)
+def _decode_rows(start, nb, geo, stations, ints, tau, ctau):  # pragma: no cover - compiled
+    """Decode states ``start .. start + nb - 1`` into buffer rows ``0 .. nb - 1``.
+
+    The encoding is mixed radix with a delay as its last digit (:mod:`.model`), so the
+    ``Gamma + 1`` consecutive states of a *row* (``start`` and ``nb`` are multiples of the
+    row length ``geo[_ROW]``) share every component but that delay, which runs 0, 1, ...
+    along the row. ``model._decode_kernel`` decodes the first two states of each row
+    (where they differ is the delay that runs) and the rest of the row is copied: 8-15
+    times fewer integer divisions than decoding every state. Uses ``ints[0]`` and
+    ``ints[5:8]``, ``ctau`` as scratch.
+    """
+    xs, l, w, d = ints[0], ints[1], ints[2], ints[3]
+    big_r = geo[_ROW]
+    m = geo[_M]
+    if big_r == 1:
+        for i in range(nb):
+            xs[i] = start + i
+        _decode_kernel(
+            xs[:nb],
+            geo[_NTRAVEL],
+            geo[_RADIX],
+            m,
+            geo[_D],
+            stations,
+            l[:nb],
+            w[:nb],
+            d[:nb],
+            tau[:nb],
+        )
+        return
+    n2 = 2 * (nb // big_r)
+    for q in range(n2):  # the first two states of each row
+        xs[q] = start + (q // 2) * big_r + q % 2
+    l2, w2, d2 = ints[5], ints[6], ints[7]
+    _decode_kernel(
+        xs[:n2],
+        geo[_NTRAVEL],
+        geo[_RADIX],
+        m,
+        geo[_D],
+        stations,
+        l2[:n2],
+        w2[:n2],
+        d2[:n2],
+        ctau[:n2],
+    )
+    for r in range(n2 // 2):
+        a = 2 * r
+        last = 0
+        for j in range(m):
+            if ctau[a, j] != ctau[a + 1, j]:
+                last = j
+        for t in range(big_r):
+            i = r * big_r + t
+            l[i] = l2[a]
+            w[i] = w2[a]
+            d[i] = d2[a]
+            for j in range(m):
+                tau[i, j] = ctau[a, j]
+            tau[i, last] = t
+
+
+@njit(**_OPTS)
+def _successors(geo, sp, wt, wl, ints, tau, nb, action, out):  # pragma: no cover
+    """``model._successor_kernel`` on buffer rows ``0 .. nb - 1`` into ``out[:nb]``."""
+    _successor_kernel(
+        ints[1][:nb],
+        ints[2][:nb],
+        ints[3][:nb],
+        tau[:nb],
+        action,
+        geo[_N],
+        geo[_D],
+        geo[_G],
+        geo[_RADIX],
+        geo[_NTRAVEL],
+        sp,
+        wt,
+        wl,
+        out[:nb],
+    )
+
+
+@njit(**_OPTS)
+def _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, action, out):  # pragma: no cover
+    """``model._successor_kernel`` on the ``ns`` buffer rows listed in ``ints[4]`` (copied
+    together first: the kernel takes arrays) into ``out[:ns]``."""
+    sel, cl, cw, cd = ints[4], ints[5], ints[6], ints[7]
+    l, w, d = ints[1], ints[2], ints[3]
+    for q in range(ns):
+        i = sel[q]
+        cl[q] = l[i]
+        cw[q] = w[i]
+        cd[q] = d[i]
+        for j in range(tau.shape[1]):
+            ctau[q, j] = tau[i, j]
+    _successor_kernel(
+        cl[:ns],
+        cw[:ns],
+        cd[:ns],
+        ctau[:ns],
+        action,
+        geo[_N],
+        geo[_D],
+        geo[_G],
+        geo[_RADIX],
+        geo[_NTRAVEL],
+        sp,
+        wt,
+        wl,
+        out[:ns],
+    )
+
+
+@njit(**_OPTS)
+def _loiter_allowed(geo, station_pos, li, di, tau, i):  # pragma: no cover - compiled
+    """:meth:`PatrolModel.allowed`'s loiter column for one decoded state."""
+    k = station_pos[li]
+    if k < 0 or di >= geo[_D]:
+        return False
+    return di >= 1 or tau[i, k] > 0 or geo[_EMPTY] != 0
+
+
+@njit(**_OPTS)
+def _select_loiter(geo, sp, ints, tau, nb):  # pragma: no cover - compiled
+    """List the buffer rows where loitering is allowed in ``ints[4]``; return how many."""
+    sel, l, d = ints[4], ints[1], ints[3]
+    ns = 0
+    for i in range(nb):
+        if _loiter_allowed(geo, sp, l[i], d[i], tau, i):
+            sel[ns] = i
+            ns += 1
+    return ns
+
+
+@njit(**_OPTS)
+def _select_action(act, b0, nb, action, ints):  # pragma: no cover - compiled
+    """List the buffer rows whose state has ``act[x] == action`` in ``ints[4]``."""
+    sel = ints[4]
+    ns = 0
+    for i in range(nb):
+        if act[b0 + i] == action:
+            sel[ns] = i
+            ns += 1
+    return ns
+
+
+@njit(inline="always", **_OPTS)
+def _expect(succ, i, probs, v):  # pragma: no cover - compiled
+    """``sum_l probs[l] v[succ[i, l]]`` in the array path's order (from 0.0)."""
+    acc = 0.0
+    for ll in range(probs.size):
+        acc += probs[ll] * v[succ[i, ll]]
+    return acc
+
+
+@njit(inline="always", **_OPTS)
+def _expect_lifted(succ, i, probs, labels, w):  # pragma: no cover - compiled
+    """``sum_l probs[l] w[labels[succ[i, l]]]``: the expectation of a lifted partition vector."""
+    acc = 0.0
+    for ll in range(probs.size):
+        acc += probs[ll] * w[labels[succ[i, ll]]]
+    return acc
+
+
+@njit(inline="always", **_OPTS)
+def _penalty(rho, gamma, tau, i):  # pragma: no cover - compiled
+    """``-rho min(taubar, Gamma)``, the float :meth:`PatrolModel.rewards` computes."""
+    tb = 0
+    for j in range(tau.shape[1]):
+        if tau[i, j] > tb:
+            tb = tau[i, j]
+    return -rho * np.float64(min(tb, gamma))
+
+
+@njit(inline="always", **_OPTS)
+def _partition_of(geo, station_pos, ints, tau, i):  # pragma: no cover - compiled
+    """The partition of buffer row ``i`` (:func:`.partitions.state_partition_kernel`)."""
+    return state_partition_kernel(
+        ints[1][i],
+        ints[2][i],
+        ints[3][i],
+        tau[i],
+        station_pos,
+        geo[_N],
+        geo[_D],
+        geo[_G],
+        geo[_TBS],
+        geo[_LBS],
+    )
+
+
+@njit(**_OPTS)
+def _chunk(n, nchunks, big_r, c):  # pragma: no cover - compiled
+    """States ``[start, end)`` of chunk ``c``: consecutive, starting at a row boundary."""
+    size = (n + nchunks - 1) // nchunks
+    size = (size + big_r - 1) // big_r * big_r
+    return min(n, c * size), min(n, (c + 1) * size)
+
+
+@njit(parallel=True, **_OPTS)
+def _sweep_max_kernel(
+    geo, stations, sp, wt, wl, probs, inc, rho, lam, v, out, arg, nchunks, block
+):  # pragma: no cover - compiled
+    """``out = T v`` (first maximising action in ``arg``); returns min, max of ``out - v``."""
+    n = v.size
+    lo_c = np.full(nchunks, np.inf)
+    hi_c = np.full(nchunks, -np.inf)
+    for c in prange(nchunks):
+        ints, tau, ctau, s = _buffers(block, geo[_M])
+        sel = ints[4]
+        lc, hc = np.inf, -np.inf
+        start, end = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(start, end, block):
+            nb = min(block, end - b0)
+            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
+            _successors(geo, sp, wt, wl, ints, tau, nb, 0, s[0])
+            _successors(geo, sp, wt, wl, ints, tau, nb, 1, s[1])
+            ns = _select_loiter(geo, sp, ints, tau, nb)
+            _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, 2, s[2])
+            p = 0
+            for i in range(nb):
+                pen = _penalty(rho, geo[_G], tau, i)
+                best = pen + lam * _expect(s[0], i, probs, v)
+                best_a = 0
+                q = pen + lam * _expect(s[1], i, probs, v)
+                if q > best:
+                    best, best_a = q, 1
+                if p < ns and sel[p] == i:
+                    q = (pen + inc[ints[3][i]]) + lam * _expect(s[2], p, probs, v)
+                    p += 1
+                    if q > best:
+                        best, best_a = q, 2
+                x = b0 + i
+                out[x] = best
+                arg[x] = best_a
+                diff = best - v[x]
+                lc = min(lc, diff)
+                hc = max(hc, diff)
+        lo_c[c] = lc
+        hi_c[c] = hc
+    return lo_c.min(), hi_c.max()
+
+
+@njit(parallel=True, **_OPTS)
+def _sweep_policy_kernel(
+    geo, stations, sp, wt, wl, probs, inc, rho, lam, act, v, out, nchunks, block
+):  # pragma: no cover - compiled
+    """``out = T_pi v`` for the actions ``act``; returns min, max of ``out - v``."""
+    n = v.size
+    lo_c = np.full(nchunks, np.inf)
+    hi_c = np.full(nchunks, -np.inf)
+    for c in prange(nchunks):
+        ints, tau, ctau, s = _buffers(block, geo[_M])
+        sel, d = ints[4], ints[3]
+        lc, hc = np.inf, -np.inf
+        start, end = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(start, end, block):
+            nb = min(block, end - b0)
+            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
+            for a in range(3):
+                ns = _select_action(act, b0, nb, a, ints)
+                _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, a, s[a])
+                for p in range(ns):
+                    i = sel[p]
+                    r = _penalty(rho, geo[_G], tau, i)
+                    if a == 2:
+                        r = r + inc[d[i]]
+                    q = r + lam * _expect(s[a], p, probs, v)
+                    x = b0 + i
+                    out[x] = q
+                    diff = q - v[x]
+                    lc = min(lc, diff)
+                    hc = max(hc, diff)
+        lo_c[c] = lc
+        hi_c[c] = hc
+    return lo_c.min(), hi_c.max()
+
+
+@njit(parallel=True, **_OPTS)
+def _check_policy_kernel(geo, stations, sp, act, nchunks, block):  # pragma: no cover
+    """First state whose action ``act[x]`` is a forbidden loiter, or -1 (``act`` is known
+    to hold 0, 1 or 2)."""
+    n = act.size
+    first = np.full(nchunks, -1, np.int64)
+    for c in prange(nchunks):
+        ints, tau, ctau, _ = _buffers(block, geo[_M])
+        start, end = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(start, end, block):
+            if first[c] >= 0:
+                break
+            nb = min(block, end - b0)
+            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
+            for i in range(nb):
+                if act[b0 + i] == 2 and not _loiter_allowed(
+                    geo, sp, ints[1][i], ints[3][i], tau, i
+                ):
+                    first[c] = b0 + i
+                    break
+    for c in range(nchunks):
+        if first[c] >= 0:
+            return first[c]
+    return -1
+
+
+@njit(parallel=True, **_OPTS)
+def _reward_absmax_kernel(geo, stations, sp, inc, rho, n, nchunks, block):  # pragma: no cover
+    """``max |R_u(x)|`` over the allowed pairs (the scale of the default tolerance)."""
+    best = np.zeros(nchunks)
+    for c in prange(nchunks):
+        ints, tau, ctau, _ = _buffers(block, geo[_M])
+        bc = 0.0
+        start, end = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(start, end, block):
+            nb = min(block, end - b0)
+            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
+            for i in range(nb):
+                pen = _penalty(rho, geo[_G], tau, i)
+                bc = max(bc, abs(pen))
+                if _loiter_allowed(geo, sp, ints[1][i], ints[3][i], tau, i):
+                    bc = max(bc, abs(pen + inc[ints[3][i]]))
+        best[c] = bc
+    return best.max()
+
+
+@njit(parallel=True, **_OPTS)
+def _labels_kernel(geo, stations, sp, labels, nchunks, block):  # pragma: no cover - compiled
+    """``labels[x]``: the partition of every state (Section 4.2)."""
+    n = labels.size
+    for c in prange(nchunks):
+        ints, tau, ctau, _ = _buffers(block, geo[_M])
+        start, end = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(start, end, block):
+            nb = min(block, end - b0)
+            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
+            for i in range(nb):
+                labels[b0 + i] = _partition_of(geo, sp, ints, tau, i)
+
+
+@njit(parallel=True, **_OPTS)
+def _decode_range_kernel(geo, stations, start, comps, nchunks, block):  # pragma: no cover
+    """Components ``(l, w, d, tau)`` of states ``start ..`` as the sweeps decode them (the
+    row decoding, for tests). ``start`` and ``len(comps)`` are multiples of the row."""
+    n = comps.shape[0]
+    m = geo[_M]
+    for c in prange(nchunks):
+        ints, tau, ctau, _ = _buffers(block, m)
+        lo, hi = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(lo, hi, block):
+            nb = min(block, hi - b0)
+            _decode_rows(start + b0, nb, geo, stations, ints, tau, ctau)
+            for i in range(nb):
+                comps[b0 + i, 0] = ints[1][i]
+                comps[b0 + i, 1] = ints[2][i]
+                comps[b0 + i, 2] = ints[3][i]
+                for j in range(m):
+                    comps[b0 + i, 3 + j] = tau[i, j]
+
+
+# columns of the per-chunk statistics of the greedy pass
+_F_UP_SUM, _F_UP_MAX, _F_UP_MIN, _F_LOW_SUM, _F_LOW_MAX, _F_LOW_MIN = range(6)
+_F_GAP_SUM, _F_GAP_MAX, _F_LOSS_MAX = range(6, 9)
+_I_UP_ARGMIN, _I_LOW_ARGMIN, _I_OPTIMAL, _I_DIFFERS, _I_SUBOPT = range(5)
+
+
+@njit(**_OPTS)
+def _greedy_state(i, p, ns, sel, s, probs, inc, d, pen, lam, v, labels, w_low, tie, qv, qw):
+    # pragma: no cover - compiled
+    """Q-values of ``v`` and of the lifted ``w_low`` at buffer row ``i`` (``qv``, ``qw``);
+    returns the number of actions (3 when row ``i`` is the loiter list's entry ``p``)."""
+    n_act = 3 if (p < ns and sel[p] == i) else 2
+    for a in range(n_act):
+        r = pen + inc[d[i]] if a == 2 else pen
+        row = p if a == 2 else i
+        qv[a] = r + lam * _expect(s[a], row, probs, v)
+        qw[a] = r + lam * _expect_lifted(s[a], row, probs, labels, w_low)
+    return n_act
+
+
+@njit(parallel=True, **_OPTS)
+def _greedy_gap_kernel(
+    geo,
+    stations,
+    sp,
+    wt,
+    wl,
+    probs,
+    inc,
+    rho,
+    lam,
+    v,
+    labels,
+    w_low,
+    v_up,
+    pistar,
+    tie_rtol,
+    loss_tol,
+    pi_s,
+    fstats,
+    istats,
+    nchunks,
+    block,
+):  # pragma: no cover - compiled
+    """One pass: ``pi_s`` greedy w.r.t. the lifted ``w_low`` (lowest action among those tied
+    within ``tie_rtol``, as :func:`lpbounds.greedy_policy`), whether it is among ``v``'s
+    optimal actions (tied within ``tie_rtol``), its one-step loss, and the gaps
+    ``v_up - v``, ``v - w_low``, ``v_up - w_low`` at every state."""
+    n = v.size
+    for c in prange(nchunks):
+        ints, tau, ctau, s = _buffers(block, geo[_M])
+        sel, d = ints[4], ints[3]
+        qv = np.empty(3)
+        qw = np.empty(3)
+        f = fstats[c]
+        f[:] = 0.0
+        for col in (_F_UP_MIN, _F_LOW_MIN):
+            f[col] = np.inf
+        for col in (_F_UP_MAX, _F_LOW_MAX, _F_GAP_MAX, _F_LOSS_MAX):
+            f[col] = -np.inf
+        st = istats[c]
+        st[:] = 0
+        start, end = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(start, end, block):
+            nb = min(block, end - b0)
+            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
+            _successors(geo, sp, wt, wl, ints, tau, nb, 0, s[0])
+            _successors(geo, sp, wt, wl, ints, tau, nb, 1, s[1])
+            ns = _select_loiter(geo, sp, ints, tau, nb)
+            _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, 2, s[2])
+            p = 0
+            for i in range(nb):
+                x = b0 + i
+                pen = _penalty(rho, geo[_G], tau, i)
+                n_act = _greedy_state(
+                    i, p, ns, sel, s, probs, inc, d, pen, lam, v, labels, w_low, tie_rtol, qv, qw
+                )
+                if n_act == 3:
+                    p += 1
+                best_v = qv[:n_act].max()
+                best_w = qw[:n_act].max()
+                thr_w = best_w - tie_rtol * max(1.0, abs(best_w))
+                a_s = 0
+                while qw[a_s] < thr_w:
+                    a_s += 1
+                pi_s[x] = a_s
+                if qv[a_s] >= best_v - tie_rtol * max(1.0, abs(best_v)):
+                    st[_I_OPTIMAL] += 1
+                loss = best_v - qv[a_s]
+                f[_F_LOSS_MAX] = max(f[_F_LOSS_MAX], loss)
+                if loss > loss_tol:
+                    st[_I_SUBOPT] += 1
+                if a_s != pistar[x]:
+                    st[_I_DIFFERS] += 1
+                k = labels[x]
+                up = v_up[k] - v[x]
+                low = v[x] - w_low[k]
+                f[_F_UP_SUM] += up
+                f[_F_UP_MAX] = max(f[_F_UP_MAX], up)
+                if up < f[_F_UP_MIN]:
+                    f[_F_UP_MIN] = up
+                    st[_I_UP_ARGMIN] = x
+                f[_F_LOW_SUM] += low
+                f[_F_LOW_MAX] = max(f[_F_LOW_MAX], low)
+                if low < f[_F_LOW_MIN]:
+                    f[_F_LOW_MIN] = low
+                    st[_I_LOW_ARGMIN] = x
+                gap = v_up[k] - w_low[k]
+                f[_F_GAP_SUM] += gap
+                f[_F_GAP_MAX] = max(f[_F_GAP_MAX], gap)
+
+
+_S_SUM, _S_MAX, _S_MIN, _S_LOW_MIN = range(4)
+_J_ARGMAX, _J_ARGMIN, _J_LOW_ARGMIN = range(3)
+
+
+@njit(parallel=True, **_OPTS)
+def _vsub_kernel(
+    geo, stations, sp, vstar, vsub, w_low, fstats, istats, nchunks, block
+):  # pragma: no cover - compiled
+    """Statistics of ``vstar - vsub`` (sum, max, min with their states) and the smallest
+    ``vsub - w_low`` (the lifted lower bound) with its state."""
+    n = vstar.size
+    for c in prange(nchunks):
+        ints, tau, ctau, _ = _buffers(block, geo[_M])
+        f = fstats[c]
+        f[_S_SUM] = 0.0
+        f[_S_MAX] = -np.inf
+        f[_S_MIN] = np.inf
+        f[_S_LOW_MIN] = np.inf
+        st = istats[c]
+        st[:] = 0
+        start, end = _chunk(n, nchunks, geo[_ROW], c)
+        for b0 in range(start, end, block):
+            nb = min(block, end - b0)
+            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
+            for i in range(nb):
+                x = b0 + i
+                diff = vstar[x] - vsub[x]
+                f[_S_SUM] += diff
+                if diff > f[_S_MAX]:
+                    f[_S_MAX] = diff
+                    st[_J_ARGMAX] = x
+                if diff < f[_S_MIN]:
+                    f[_S_MIN] = diff
+                    st[_J_ARGMIN] = x
+                k = _partition_of(geo, sp, ints, tau, i)
+                low = vsub[x] - w_low[k]
+                if low < f[_S_LOW_MIN]:
+                    f[_S_LOW_MIN] = low
+                    st[_J_LOW_ARGMIN] = x
+
+
+# ---------------------------------------------------------------------- the model
+class MatrixFreePatrol:
+    """The patrol MDP of one :class:`PatrolParams` as compiled sweeps (nothing stored per state).
+
+    Parameters
+    ----------
+    params : PatrolParams, optional
+        Default: the paper's example.
+
+    Notes
+    -----
+    The state encoding, the dynamics and the partitions are those of
+    :class:`~lpbounds.patrol.model.PatrolModel` (whose geometry arrays this class takes);
+    the sweeps run in parallel over chunks of consecutive states (numba ``prange``).
+    """
+
+    def __init__(self, params: PatrolParams | None = None) -> None:
+        pm = PatrolModel(params)
+        p = pm.params
+        self.params = p
+        self.model = pm
+        self.n_vars = int(p.n_states)
+        self.discount = float(p.discount)
+        tb_size, lb_size = block_sizes(p)
+        self._geo = np.array(
+            [
+                p.N,
+                p.m,
+                p.D,
+                p.Gamma,
+                pm.radix,
+                pm.n_travel,
+                int(p.allow_empty_loiter),
+                tb_size,
+                lb_size,
+                pm.radix if p.m >= 2 else 1,
+            ],
+            dtype=np.int64,
+        )
+        self._stations = np.ascontiguousarray(pm.stations, dtype=np.int64)
+        self._sp = np.ascontiguousarray(pm.station_pos, dtype=np.int64)
+        self._wt = np.ascontiguousarray(pm.w_travel, dtype=np.int64)
+        self._wl = np.ascontiguousarray(pm.w_loiter, dtype=np.int64)
+        self._probs = np.ascontiguousarray(p.alert_probabilities(), dtype=np.float64)
+        # the loiter reward's increment per dwell d (d = D: loiter not allowed)
+        self._inc = np.append(p.information_increments(), 0.0)
+        self._rho = float(p.rho)
+        self._reward_absmax: float | None = None
+        row = int(self._geo[_ROW])
+        self._block = max(1, BLOCK // row) * row  # whole rows
+
+    def __repr__(self) -> str:
+        return f"MatrixFreePatrol(n_states={self.n_vars:,}, m={self.params.m})"
+
+    #: The sweeps are compiled (for :func:`lpbounds.dp._threads_for`, which runs sweeps of
+    #: fewer than ``SERIAL_SWEEP_READS`` reads on one thread, as the array path does).
+    compiled: bool = True
+
+    @property
+    def n_rows(self) -> int:
+        """State-action pairs at most (three actions per state): the size of a sweep."""
+        return 3 * self.n_vars
+
+    @property
+    def n_outcomes(self) -> int:
+        """Outcomes per pair, ``m + 1``."""
+        return self.params.m + 1
+
+    @staticmethod
+    def nchunks() -> int:
+        """Work chunks per sweep (a few per numba thread)."""
+        from .._backend import nchunks
+
+        return nchunks()
+
+    def _common(self) -> tuple[Any, ...]:
+        return (
+            self._geo,
+            self._stations,
+            self._sp,
+            self._wt,
+            self._wl,
+            self._probs,
+            self._inc,
+            self._rho,
+            self.discount,
+        )
+
+    @property
+    def reward_absmax(self) -> float:
+        """``max |R_u(x)|`` over the allowed pairs (one pass over the states, cached)."""
+        if self._reward_absmax is None:
+            self._reward_absmax = float(
+                _reward_absmax_kernel(
+                    self._geo,
+                    self._stations,
+                    self._sp,
+                    self._inc,
+                    self._rho,
+                    self.n_vars,
+                    self.nchunks(),
+                    self._block,
+                )
+            )
+        return self._reward_absmax
+
+    def default_tol(self) -> float:
+        """:func:`lpbounds.solve_exact`'s default: ``DP_RTOL max|R| / (1 - lambda)``."""
+        return DP_RTOL * dp_scale(self.reward_absmax, self.discount)
+
+    def new_vector(self) -> np.ndarray:
+        """An uninitialised float64 vector over the states."""
+        return np.empty(self.n_vars)
+
+    def sweep_max(self, v: np.ndarray, out: np.ndarray, arg: np.ndarray) -> tuple[float, float]:
+        """``out = T v``, the first maximising action in ``arg`` (int8); returns the min and
+        max of ``out - v``."""
+        lo, hi = _sweep_max_kernel(*self._common(), v, out, arg, self.nchunks(), self._block)
+        return float(lo), float(hi)
+
+    def sweep_policy(self, act: np.ndarray, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:
+        """``out = T_pi v`` for the actions ``act`` (int8); returns min and max of ``out - v``."""
+        lo, hi = _sweep_policy_kernel(*self._common(), act, v, out, self.nchunks(), self._block)
+        return float(lo), float(hi)
+
+    def labels(self) -> np.ndarray:
+        """The partition of every state, int32 (computed, as the model's :meth:`partition`)."""
+        out = np.empty(self.n_vars, dtype=np.int32)
+        _labels_kernel(self._geo, self._stations, self._sp, out, self.nchunks(), self._block)
+        return out
+
+    def check_policy(self, policy: Any) -> np.ndarray:
+        """``policy`` as an int8 array of allowed actions, or a ValidationError naming the
+        first state where it is not one."""
+        pol = np.asarray(policy)
+        if pol.shape != (self.n_vars,) or pol.dtype.kind not in "iu":
+            raise ValidationError(
+                f"a policy must be {self.n_vars} integers; got {pol.shape} {pol.dtype}"
+            )
+        if pol.size and (pol.min() < 0 or pol.max() > 2):
+            x = int(np.flatnonzero((pol < 0) | (pol > 2))[0])
+            raise ValidationError(f"policy[{x}] = {int(pol[x])} is not an action index 0..2")
+        act = np.ascontiguousarray(pol, dtype=np.int8)
+        x = int(
+            _check_policy_kernel(
+                self._geo, self._stations, self._sp, act, self.nchunks(), self._block
+            )
+        )
+        if x >= 0:
+            raise ValidationError(f"policy[{x}] = {int(act[x])} is not allowed in state {x}")
+        return act
+
+
+# ---------------------------------------------------------------------- solvers
+Callback = Callable[[int, float], None]
+
+
+@dataclass
+class MatrixFreeSolution:
+    """``V*`` from :func:`solve_vstar`: :class:`lpbounds.dp.DPResult`'s fields without the
+    row indices (there are no rows); the policy is int8.
+
+    Attributes
+    ----------
+    values : ndarray
+        ``V``, within ``error_bound`` of ``V*`` in the max norm.
+    policy : ndarray of int8
+        Greedy w.r.t. ``values`` (first maximising action).
+    residual : float
+        ``||T values - values||_inf`` measured on the returned vector.
+    error_bound : float
+        ``(residual + slack) / (1 - lambda)`` (:func:`lpbounds.tolerances.error_bound`).
+    tol, iterations, sweeps, seconds, status, history
+        As in :class:`lpbounds.dp.DPResult`.
+    """
+
+    values: np.ndarray
+    policy: np.ndarray
+    residual: float
+    error_bound: float
+    tol: float
+    iterations: int
+    sweeps: int
+    seconds: float
+    status: Status
+    method: str = "mpi"
+    history: list[float] = field(default_factory=list)
+
+    @property
+    def converged(self) -> bool:
+        """``status is Status.OPTIMAL``."""
+        return self.status is Status.OPTIMAL
+
+
+def _absmax(v: np.ndarray) -> float:
+    """``max |v|`` without a temporary of the vector's size."""
+    return max(abs(float(v.max(initial=0.0))), abs(float(v.min(initial=0.0))))
+
+
+def _check_finite(what: str, v: np.ndarray, res: float) -> float:
+    vmax = _absmax(v)
+    if not (np.isfinite(vmax) and np.isfinite(res)):
+        raise ConvergenceError(
+            f"{what} produced non-finite values (max|V| = {vmax}, residual {res})"
+        )
+    return vmax
+
+
+def solve_vstar(
+    mf: MatrixFreePatrol,
+    *,
+    eval_sweeps: int = 5,
+    max_iter: int = 100_000,
+    tol: float | None = None,
+    callback: Callback | None = None,
+    raise_on_failure: bool = True,
+) -> MatrixFreeSolution:
+    """``V*`` by modified policy iteration from 0: :func:`lpbounds.solve_exact`'s iteration
+    (same numbers, bit for bit), in two value vectors.
+
+    Parameters
+    ----------
+    mf : MatrixFreePatrol
+    eval_sweeps : int
+        Evaluation sweeps per improvement step (``solve_exact``'s default 5).
+    max_iter : int
+        Limit on improvement steps.
+    tol : float, optional
+        Stop when ``||T V - V||_inf <= tol``; default :meth:`MatrixFreePatrol.default_tol`.
+    callback : callable(iteration, residual), optional
+        Called after each improvement step.
+    raise_on_failure : bool
+        Raise ConvergenceError at ``max_iter`` (else return ``Status.ITERATION_LIMIT``).
+
+    Returns
+    -------
+    MatrixFreeSolution
+    """
+    t0 = time.perf_counter()
+    eval_sweeps = check_int("eval_sweeps", eval_sweeps, lo=0)
+    max_iter = check_int("max_iter", max_iter, lo=1)
+    tol_ = mf.default_tol() if tol is None else float(tol)
+    if not tol_ > 0:
+        raise ValidationError(f"tol must be a positive number; got {tol!r}")
+    with _threads_for(cast(Any, mf)):  # duck-typed: compiled, n_rows, n_outcomes
+        u, arg, res, its, sweeps, ok, hist = _mpi(mf, tol_, max_iter, eval_sweeps, callback)
+    vmax = _check_finite("matrix-free MPI", u, res)
+    if not ok and raise_on_failure:
+        raise ConvergenceError(
+            f"mpi stopped after {its} iterations with residual {res:.3e} > tol {tol_:.3e}"
+        )
+    return MatrixFreeSolution(
+        values=u,
+        policy=arg,
+        residual=res,
+        error_bound=error_bound(res, vmax, mf.discount),
+        tol=tol_,
+        iterations=its,
+        sweeps=sweeps,
+        seconds=time.perf_counter() - t0,
+        status=Status.OPTIMAL if ok else Status.ITERATION_LIMIT,
+        history=hist,
+    )
+
+
+def _mpi(
+    mf: MatrixFreePatrol, tol: float, max_iter: int, eval_sweeps: int, callback: Callback | None
+) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
+    """:func:`lpbounds.dp._iterate`'s loop (MPI, Porteus shift as a scalar offset) in two
+    vectors: the result is formed in place."""
+    lam = mf.discount
+    u = np.zeros(mf.n_vars)
+    buf = mf.new_vector()
+    arg = np.zeros(mf.n_vars, dtype=np.int8)
+    hist: list[float] = []
+    sweeps, c, ok, its, res = 0, 0.0, False, max_iter, np.inf
+    for it in range(max_iter + 1):
+        lo, hi = mf.sweep_max(u, buf, arg)
+        sweeps += 1
+        lo, hi, c_next = _offset_step(lam, c, lo, hi, True)
+        res = max(-lo, hi)
+        hist.append(res)
+        if callback is not None:
+            callback(it, res)
+        if res <= tol:
+            ok, its = True, it
+            break
+        if it == max_iter:
+            break
+        c = c_next
+        u, buf = buf, u
+        for _ in range(eval_sweeps):
+            lo, hi = mf.sweep_policy(arg, u, buf)
+            sweeps += 1
+            _, _, c = _offset_step(lam, c, lo, hi, True)
+            u, buf = buf, u
+    del buf
+    u += c  # the array path's u + c, in place
+    return u, arg, res, its, sweeps, ok, hist
+
+
+def evaluate_policy(
+    mf: MatrixFreePatrol,
+    policy: Any,
+    *,
+    tol: float | None = None,
+    max_sweeps: int = 1_000_000,
+) -> PolicyEvaluation:
+    """``V_pi`` by extrapolated evaluation sweeps: :func:`lpbounds.evaluate_policy`'s
+    iterative method (same numbers, bit for bit), in two value vectors.
+
+    The residual is measured by one more sweep on the returned vector; the error bound is
+    :func:`lpbounds.tolerances.error_bound` of it.
+
+    Raises
+    ------
+    ValidationError
+        ``policy`` is not one allowed action per state (names the first bad state).
+    ConvergenceError
+        The residual did not reach ``tol`` in ``max_sweeps`` sweeps.
+    """
+    t0 = time.perf_counter()
+    act = mf.check_policy(policy)
+    tol_ = mf.default_tol() if tol is None else float(tol)
+    with _threads_for(cast(Any, mf)):  # duck-typed: compiled, n_rows, n_outcomes
+        u, res, sweeps = _evaluate(mf, act, tol_, max_sweeps)
+    vmax = _check_finite("matrix-free policy evaluation", u, res)
+    if res > tol_:
+        raise ConvergenceError(f"policy evaluation stopped with residual {res:.3e} > {tol_:.3e}")
+    return PolicyEvaluation(
+        values=u,
+        residual=res,
+        error_bound=error_bound(res, vmax, mf.discount),
+        method="iterative (matrix-free)",
+        sweeps=sweeps,
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def _evaluate(
+    mf: MatrixFreePatrol, act: np.ndarray, tol: float, max_sweeps: int
+) -> tuple[np.ndarray, float, int]:
+    """:func:`lpbounds.dp._evaluate_iterative`'s loop in two vectors, and the residual
+    measured by one more sweep on the returned vector."""
+    lam = mf.discount
+    u = np.zeros(mf.n_vars)
+    buf = mf.new_vector()
+    c, sweeps = 0.0, 0
+    while True:
+        lo, hi = mf.sweep_policy(act, u, buf)
+        sweeps += 1
+        lo, hi, c_next = _offset_step(lam, c, lo, hi, True)
+        if max(-lo, hi) <= tol or sweeps >= max_sweeps:
+            break
+        c = c_next
+        u, buf = buf, u
+    u += c
+    lo, hi = mf.sweep_policy(act, u, buf)  # measured on the returned vector
+    return u, max(-lo, hi), sweeps

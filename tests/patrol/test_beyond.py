@@ -1,0 +1,218 @@
+"""The study beyond the paper's size on small instances: every number of a size's row
+recomputed independently from the array path (the MDP's arrays, numpy written here), the
+certified verdicts on hand-made intervals, the result files, and `reproduce --beyond`."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from lpbounds import evaluate_policy, solve_exact
+from lpbounds.patrol import beyond
+from lpbounds.patrol.beyond import (
+    Check,
+    SizeResult,
+    certified_check,
+    load_result,
+    report_section,
+    save_result,
+    study,
+    tighter_side,
+    write_beyond,
+)
+from lpbounds.patrol.greedy_mc import partition_bounds
+from lpbounds.patrol.model import PatrolModel
+from lpbounds.patrol.params import PatrolParams
+from lpbounds.patrol.reproduce import reproduce
+from lpbounds.tolerances import GREEDY_TIE_RTOL
+
+PARAMS = PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=5)
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    ck = tmp_path_factory.mktemp("ck")
+    lines: list[str] = []
+    res = study(PARAMS, "three-stations", log=lines.append, checkpoint=ck)
+    return res, lines, ck
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """The row from the array path: V* by solve_exact, Q-values from the successor arrays
+    (written here), pi_s by the tie rule, V_sub by solve-free iterative evaluation."""
+    pm = PatrolModel(PARAMS)
+    mdp = pm.mdp()
+    labels = pm.partition().labels
+    ref = solve_exact(mdp)
+    v = ref.values
+    pb = partition_bounds(PARAMS)
+    succ, p = mdp.successors.astype(np.int64), np.asarray(mdp.probabilities)
+
+    def q_of(vec):
+        acc = np.zeros(succ.shape[:2])
+        for ll in range(p.size):
+            acc = acc + p[ll] * vec[succ[:, :, ll]]
+        return np.where(mdp.allowed, mdp.rewards + mdp.discount * acc, -np.inf)
+
+    qw = q_of(pb.lower[labels])
+    best_w = qw.max(axis=1)
+    tied = qw >= (best_w - GREEDY_TIE_RTOL * np.maximum(1.0, np.abs(best_w)))[:, None]
+    pi_s = tied.argmax(axis=1)
+    qv = q_of(v)
+    best_v = qv.max(axis=1)
+    q_pis = qv[np.arange(v.size), pi_s]
+    optimal = q_pis >= best_v - GREEDY_TIE_RTOL * np.maximum(1.0, np.abs(best_v))
+    vsub = evaluate_policy(mdp, pi_s, method="direct").values
+    up, low = pb.upper[labels] - v, v - pb.lower[labels]
+    return {
+        "upper_max": up.max(),
+        "upper_mean": up.mean(),
+        "lower_max": low.max(),
+        "lower_mean": low.mean(),
+        "gap_max": (pb.upper - pb.lower)[labels].max(),
+        "gap_mean": (pb.upper - pb.lower)[labels].mean(),
+        "optimal_fraction": optimal.mean(),
+        "differs_fraction": (pi_s != ref.policy).mean(),
+        "max_vstar_minus_vsub": (v - vsub).max(),
+        "vstar_residual": ref.residual,
+        "upper_margin": up.min(),
+        "lower_margin": low.min(),
+    }
+
+
+def test_the_row_equals_the_array_path(result, reference):
+    res, _, _ = result
+    g, pol = res.gaps, res.policy
+    for key in ("upper_max", "lower_max", "gap_max"):
+        assert g[key] == reference[key], key
+    for key in ("upper_mean", "lower_mean", "gap_mean"):
+        assert g[key] == pytest.approx(reference[key], rel=1e-12, abs=1e-15), key
+    assert g["upper_share"] + g["lower_share"] == pytest.approx(1.0, rel=1e-12)
+    assert pol["optimal_fraction"] == reference["optimal_fraction"]
+    assert pol["differs_fraction"] == reference["differs_fraction"]
+    # V_sub by LU above, by sweeps in the study: equal within their certified errors
+    err = pol["vsub_error_bound"] + res.vstar["error_bound"] + 1e-12
+    assert abs(pol["max_vstar_minus_vsub"] - reference["max_vstar_minus_vsub"]) <= err
+    assert res.vstar["residual"] == reference["vstar_residual"]
+    assert res.n_states == PARAMS.n_states and res.n_partitions == PARAMS.n_partitions
+
+
+def test_the_checks_hold_with_the_margins_of_the_array_path(result, reference):
+    res, _, _ = result
+    assert res.all_hold, res.checks
+    up = res.checks["vstar_le_upper"]
+    assert up.min_difference == reference["upper_margin"]
+    assert up.margin == pytest.approx(reference["upper_margin"] - up.errors, abs=1e-15)
+    assert res.checks["lower_le_vstar"].min_difference == reference["lower_margin"]
+
+
+def test_certified_verdicts_on_hand_made_intervals():
+    # a = 1.0 +- 0.1 >= b = 0.5 +- 0.1: proven
+    assert certified_check("a >= b", 0.5, 7, 1.0, 0.1, 0.5, 0.1).verdict == "holds"
+    # a = 0.5 +- 0.1 < b = 1.0 +- 0.1: proven violated, at the given state
+    c = certified_check("a >= b", -0.5, 7, 0.5, 0.1, 1.0, 0.1)
+    assert (c.verdict, c.state) == ("violated", 7)
+    assert c.margin == pytest.approx(-0.7)
+    # a = 0.95 +- 0.1, b = 1.0 +- 0.1: the intervals overlap, nothing proven
+    assert certified_check("a >= b", -0.05, 0, 0.95, 0.1, 1.0, 0.1).verdict == "inconclusive"
+    # a = 1.05 +- 0.1, b = 1.0 +- 0.1: a >= b not proven, but a >= b - 0.4 is
+    ok = certified_check("a >= b", 0.05, 0, 1.05, 0.1, 1.0, 0.1, accuracy=0.4)
+    assert (ok.verdict, ok.accuracy) == ("holds", 0.4)
+    assert certified_check("a >= b", 0.05, 0, 1.05, 0.1, 1.0, 0.1).verdict == "inconclusive"
+
+
+def test_saved_results_round_trip_and_other_parameters_are_ignored(result, tmp_path):
+    res, _, _ = result
+    path = save_result(res, tmp_path / "r.json")
+    back = load_result(path, PARAMS)
+    assert back is not None and back.gaps == res.gaps and back.checks == res.checks
+    assert isinstance(back.checks["vsub_le_vstar"], Check)
+    assert load_result(path, PARAMS.replace(Gamma=4)) is None
+    assert load_result(tmp_path / "missing.json", PARAMS) is None
+
+
+def test_a_checkpoint_is_resumed(result):
+    res, lines, ck = result
+    assert (ck / "vstar.npy").is_file() and not any("loaded" in ln for ln in lines)
+    again: list[str] = []
+    res2 = study(PARAMS, "three-stations", log=again.append, checkpoint=ck)
+    assert any("V* loaded" in ln for ln in again)
+    assert res2.gaps == res.gaps and res2.vstar == res.vstar
+
+
+def _fake(m: int, upper_mean: float, lower_mean: float, upper_max: float = 1.0) -> SizeResult:
+    gap = upper_mean + lower_mean
+    gaps = {
+        "upper_max": upper_max,
+        "upper_mean": upper_mean,
+        "lower_max": 0.5,
+        "lower_mean": lower_mean,
+        "gap_max": 2.0,
+        "gap_mean": gap,
+        "upper_share": upper_mean / gap,
+        "lower_share": lower_mean / gap,
+    }
+    check = Check("V*(x) <= v*(i)", "holds", 1e-4, 1e-4, 0, 1e-9)
+    return SizeResult(
+        instance=f"m{m}",
+        m=m,
+        stations=list(range(m)),
+        n_states=10**m,
+        n_partitions=10 * m,
+        source="test",
+        vstar={"residual": 1e-11, "error_bound": 1e-10},
+        bounds={},
+        gaps=gaps,
+        policy={"optimal_fraction": 0.99, "max_vstar_minus_vsub": 1e-3},
+        checks={"vstar_le_upper": check},
+    )
+
+
+def test_the_sentence_on_the_tighter_side():
+    rows = [_fake(4, 0.3, 0.1), _fake(5, 0.4, 0.1)]
+    s = tighter_side(rows)
+    assert s.startswith("The lower bound w* is the tighter one at every size")
+    assert "0.25 at m = 4" in s and "0.20 at m = 5" in s
+    assert tighter_side([_fake(4, 0.1, 0.3)]).startswith("The upper bound v*")
+    assert "at m = [5] only" in tighter_side([_fake(4, 0.1, 0.3), _fake(5, 0.4, 0.1)])
+
+
+def test_section_figure_and_json(result, tmp_path):
+    res, _, _ = result
+    rows = [_fake(2, 0.3, 0.1), res]
+    lines, files = write_beyond(tmp_path, rows, [], figures=True)
+    text = "\n".join(lines)
+    assert "## Beyond the paper" in text and "What the gap shares say" in text
+    assert "fig8_beyond_gap_shares.png" in text
+    assert files["fig8"].read_bytes().startswith(b"\x89PNG")
+    data = json.loads(files["beyond"].read_text())
+    assert [r["m"] for r in data["sizes"]] == [2, 3]
+    assert report_section(rows, [], None, tmp_path)[0].startswith("## Beyond the paper")
+
+
+def test_reproduce_beyond_writes_the_section(result, tmp_path, monkeypatch):
+    """The plumbing of ``reproduce(beyond=True)`` with the sizes and the Monte Carlo
+    replaced by small ones (the real ones take minutes to hours)."""
+    res, _, _ = result
+    real_mc = beyond.monte_carlo
+    monkeypatch.setattr(beyond, "run_sizes", lambda *a, **k: [res])
+    monkeypatch.setattr(beyond, "monte_carlo", lambda *a, **k: real_mc(("patrol-small",)))
+    rep = reproduce(
+        "models/patrol-small.toml",
+        tmp_path / "out",
+        seeds=[1],
+        n_steps=500,
+        figures=False,
+        beyond=True,
+        beyond_cache=tmp_path / "cache",
+    )
+    text = (tmp_path / "out" / "report.md").read_text()
+    assert "## Beyond the paper" in text and "pi_s where no exact value exists" in text
+    data = json.loads((tmp_path / "out" / "beyond.json").read_text())
+    assert [r["m"] for r in data["sizes"]] == [2, 3]
+    assert data["sizes"][0]["source"].startswith("array path")
+    assert all(c["verdict"] == "holds" for c in data["sizes"][0]["checks"].values())
+    assert rep.out == tmp_path / "out"
