@@ -155,6 +155,90 @@ def _summary(frame, limit: float) -> str:
     return head + "\n".join(rows)
 
 
+def _notes(frame) -> str:
+    """One line per solve that did not end optimal, with what it said (killed, crashed)."""
+    lines = []
+    for r in frame.itertuples(index=False):
+        note = str(r.note) if isinstance(r.note, str) else ""
+        if r.status != "optimal" and note:
+            lines.append(f"* {r.formulation} {r.config}: {r.status}: {note[:200]}")
+    return "\n".join(lines)
+
+
+def _run(args: argparse.Namespace, hard: float) -> tuple[list[dict], dict]:
+    """Every (formulation, solver) in its own process, ELP last; results saved as they come."""
+    import pandas as pd
+
+    forms = [f for f in args.formulations if f != "ELP"]
+    forms += [f for f in args.formulations if f == "ELP"]  # ELP last: the largest
+    meta = {"date": today(), "machine": machine(), "load_start": os.getloadavg()[0]}
+    records: list[dict] = []
+    t0 = time.perf_counter()
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    for form in forms:
+        for cfg in args.solvers:
+            rec = solve_isolated(args.model, form, cfg, args.time_limit, hard, args.max_gb)
+            records.append(rec)
+            print(
+                f"{form:5s} {cfg:12s} {rec['status']:12s} cert.err {rec.get('certified_error')} "
+                f"solve {rec.get('solve_seconds')} peak {rec.get('peak_rss_mb', 0):.0f} MB "
+                f"{(rec.get('note') or '')[:120]}",
+                flush=True,
+            )
+            pd.DataFrame.from_records(records).to_csv(RESULTS / "study_scale.csv", index=False)
+    meta.update(load_end=os.getloadavg()[0], seconds=time.perf_counter() - t0)
+    meta.update(model=Path(args.model).name, time_limit=args.time_limit, hard=hard)
+    meta["max_gb"] = args.max_gb
+    (RESULTS / "study_scale.json").write_text(json.dumps(meta, indent=2) + "\n")
+    return records, meta
+
+
+def _write(frame, meta: dict) -> str:
+    """The profiles under docs/img/ and the ``study-scale`` section of docs/benchmarks.md."""
+    from lpbounds.profiles import plot_performance_profile
+    from lpbounds.study_report import profile_tables
+
+    time_table, acc_table = profile_tables(frame)
+    IMG.mkdir(parents=True, exist_ok=True)
+    labels = {c: f"{c}: {b}" for c, b in zip(frame["config"], frame["backend"], strict=True)}
+    for table, name, what in (
+        (time_table, "time", "solve time"),
+        (acc_table, "accuracy", "certified error"),
+    ):
+        plot_performance_profile(
+            table,
+            IMG / f"study-scale-{name}.png",
+            title=f"Paper-size LPs: {what}",
+            measure=what,
+            labels=labels,
+        )
+    body = (
+        "## Solver study at the paper's size (`benchmarks/bench_study_scale.py`)\n\n"
+        f"{meta['date']}; {meta['machine']}. Load average {meta['load_start']:.1f} at the "
+        f"start, {meta['load_end']:.1f} at the end (2 cores shared with other work: times are "
+        f"noisy). Model `{meta['model']}`; time limit {meta['time_limit']:g} s per solve in "
+        f"each solver's own keyword; a process is killed after {meta['hard']:.0f} s or "
+        f"{meta['max_gb']:g} GB. Each solve alone in a fresh process, through cvxpy "
+        f"(`lpbounds.study.run_task`, as `lpbounds compare`); {len(frame)} solves in "
+        f"{meta['seconds']:.0f} s. Raw table: `benchmarks/results/study_scale.csv`.\n\n"
+        "Cert. error: lpbounds' certified bound on max |values - exact optimum| of the "
+        "returned point (relative: / (max|R|/(1-lambda))); max dev: against the exact fixed "
+        "point; a point returned at the time limit keeps its certified error. Solved = "
+        "certified within 1e-6 relative. Process s: the whole process (building the MDP, the "
+        "exact reference by DP, the LP, cvxpy's compilation, the solve, the certificate).\n\n"
+        + _table(frame)
+        + "\n\n"
+        + _notes(frame)
+        + "\n\n"
+        + _summary(frame, meta["time_limit"])
+        + "\n\nShifted geometric means (SGM) of solve time, unsolved charged the time limit.\n\n"
+        "![time profile](img/study-scale-time.png)\n"
+        "![accuracy profile](img/study-scale-accuracy.png)\n"
+    )
+    write_section("study-scale", body)
+    return body
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", default=str(ROOT / "models" / "patrol-paper.toml"))
@@ -169,72 +253,30 @@ def main() -> None:
     )
     ap.add_argument("--max-gb", type=float, default=7.0)
     ap.add_argument("--no-write", action="store_true", help="print, do not touch docs/")
+    ap.add_argument(
+        "--from-results",
+        action="store_true",
+        help="rewrite the section and profiles from benchmarks/results/study_scale.csv and "
+        ".json (the last run) without solving",
+    )
     args = ap.parse_args()
     import pandas as pd
 
-    from lpbounds.profiles import plot_performance_profile
-    from lpbounds.study_report import profile_tables
-
     hard = args.hard_timeout or 2 * args.time_limit + 300
-    forms = [f for f in args.formulations if f != "ELP"] + [
-        f for f in args.formulations if f == "ELP"
-    ]  # ELP last: the largest
-    load = os.getloadavg()
-    records = []
-    t0 = time.perf_counter()
-    for form in forms:
-        for cfg in args.solvers:
-            rec = solve_isolated(args.model, form, cfg, args.time_limit, hard, args.max_gb)
-            records.append(rec)
-            print(
-                f"{form:5s} {cfg:12s} {rec['status']:12s} cert.err {rec.get('certified_error')} "
-                f"solve {rec.get('solve_seconds')} peak {rec.get('peak_rss_mb', 0):.0f} MB "
-                f"{(rec.get('note') or '')[:120]}",
-                flush=True,
-            )
-            RESULTS.mkdir(parents=True, exist_ok=True)
-            pd.DataFrame.from_records(records).to_csv(RESULTS / "study_scale.csv", index=False)
-    frame = pd.DataFrame.from_records(records)
-    for col in ("backend", "n_rows", "max_deviation", "compile_seconds", "iterations"):
+    if args.from_results:
+        frame = pd.read_csv(RESULTS / "study_scale.csv")
+        meta = json.loads((RESULTS / "study_scale.json").read_text())
+    else:
+        records, meta = _run(args, hard)
+        frame = pd.DataFrame.from_records(records)
+    for col in ("backend", "n_rows", "max_deviation", "compile_seconds", "iterations", "note"):
         if col not in frame:
             frame[col] = None
     frame["backend"] = frame["backend"].fillna(frame["solver"])
     if args.no_write:
-        print(_table(frame))
-        print(_summary(frame, args.time_limit))
+        print(_table(frame) + "\n\n" + _notes(frame) + "\n\n" + _summary(frame, args.time_limit))
         return
-    time_table, acc_table = profile_tables(frame)
-    IMG.mkdir(parents=True, exist_ok=True)
-    for table, name, what in (
-        (time_table, "time", "solve time"),
-        (acc_table, "accuracy", "certified error"),
-    ):
-        plot_performance_profile(
-            table, IMG / f"study-scale-{name}.png", title=f"Paper-size LPs: {what}", measure=what
-        )
-    load_end = os.getloadavg()
-    body = (
-        "## Solver study at the paper's size (`benchmarks/bench_study_scale.py`)\n\n"
-        f"{today()}; {machine()}. Load average {load[0]:.1f} at the start, "
-        f"{load_end[0]:.1f} at the end (2 cores shared with other work: times are noisy). "
-        f"Model `{Path(args.model).name}`; time limit {args.time_limit:g} s per solve in each "
-        f"solver's own keyword; a process is killed after {hard:.0f} s or "
-        f"{args.max_gb:g} GB. Each solve alone in a fresh process, through cvxpy "
-        f"(`lpbounds.study.run_task`, as `lpbounds compare`); {len(frame)} solves in "
-        f"{time.perf_counter() - t0:.0f} s.\n\n"
-        "Cert. error: lpbounds' certified bound on max |values - exact optimum| of the "
-        "returned point (relative: / (max|R|/(1-lambda))); max dev: against the exact fixed "
-        "point; a point returned at the time limit keeps its certified error. Solved = "
-        "certified within 1e-6 relative.\n\n"
-        + _table(frame)
-        + "\n\n"
-        + _summary(frame, args.time_limit)
-        + "\n\nShifted geometric means (SGM) of solve time, unsolved charged the time limit.\n\n"
-        "![time profile](img/study-scale-time.png)\n"
-        "![accuracy profile](img/study-scale-accuracy.png)\n"
-    )
-    write_section("study-scale", body)
-    print(body)
+    print(_write(frame, meta))
 
 
 if __name__ == "__main__":
