@@ -454,3 +454,78 @@ def test_compile_is_announced_once_per_group(monkeypatch, caplog):
     with caplog.at_level("WARNING", logger="lpbounds"):
         lb.solve_exact(lb.garnet(30, 2, 3, 0.9, seed=1))
     assert not caplog.records, "a small model compiles nothing and says nothing"
+
+
+# ---------------------------------------------------------------------- thread choice
+def _numba_threads():
+    numba = pytest.importorskip("numba")
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("numba has one thread here")
+    return numba
+
+
+@pytest.mark.parametrize("form", ["post-decision", "rows"])
+@pytest.mark.parametrize("method", ["mpi", "vi"])
+def test_thread_choice_changes_no_number(monkeypatch, form, method):
+    """Calibrated threads (re-timed every sweep), one thread and two give identical results."""
+    numba = _numba_threads()
+    from lpbounds import dp
+
+    monkeypatch.setattr(_backend, "SMALL_READS", COMPILED)
+    monkeypatch.setattr(dp, "SERIAL_SWEEP_READS", 0)  # the choice runs on this small model
+    monkeypatch.setattr(dp._ThreadChoice, "RECHECK", 1)  # and switches as often as it can
+    mdp = PatrolModel(PatrolParams(N=6, stations=(0, 3), Gamma=4)).mdp()
+    model = mdp if form == "post-decision" else exact_rows(mdp)
+    before = numba.get_num_threads()
+    results = []
+    for threads in (2, 1, 2):
+        numba.set_num_threads(threads)
+        try:
+            results.append(lb.solve_exact(model, method, tol=1e-6))
+        finally:
+            numba.set_num_threads(before)
+    for r in results[1:]:
+        np.testing.assert_array_equal(r.values, results[0].values)
+        np.testing.assert_array_equal(r.policy, results[0].policy)
+        assert r.history == results[0].history
+    assert numba.get_num_threads() == before  # restored
+
+
+def test_thread_choice_follows_the_timings(monkeypatch):
+    numba = _numba_threads()
+    from lpbounds import dp
+
+    monkeypatch.setattr(_backend, "SMALL_READS", COMPILED)
+    monkeypatch.setattr(dp, "SERIAL_SWEEP_READS", 0)
+    before = numba.get_num_threads()
+    numba.set_num_threads(2)
+    try:
+        rows = exact_rows(lb.garnet(20, 2, 2))
+        for fast, slow in ((1, 2), (2, 1)):
+            ch = dp._ThreadChoice(rows)
+            assert ch.many == 2
+            n_cal = 2 * ch.SAMPLES + 1
+            for i in range(n_cal):
+                k = ch.start("max")
+                assert k == (1 if i % 2 else 2)  # sweep 0 on all threads, then alternating
+                ch.stop("max", k, 1.0 if k == fast else 3.0)
+                ch.stop("policy", ch.start("policy"), 1.0)  # another kind: its own choice
+            assert ch.chosen["max"] == fast and ch.chosen["policy"] == 2  # a tie: all threads
+            for _ in range(n_cal, ch.RECHECK):  # no recheck before RECHECK sweeps
+                k = ch.start("max")
+                assert k == fast and numba.get_num_threads() == fast
+                ch.stop("max", k, 1.0)
+            k = ch.start("max")  # the recheck: the other count, once
+            assert k == slow
+            ch.stop("max", k, 1.5)  # slower: kept as it was
+            assert ch.chosen["max"] == fast
+            for _ in range(ch.RECHECK - 1):
+                ch.stop("max", ch.start("max"), 1.0)
+            k = ch.start("max")
+            assert k == slow
+            ch.stop("max", k, 0.4)  # much faster: switched
+            assert ch.chosen["max"] == slow
+            ch.restore()
+            assert numba.get_num_threads() == 2
+    finally:
+        numba.set_num_threads(before)

@@ -526,6 +526,87 @@ def _serial_if_small(func: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
+class _ThreadChoice:
+    """One thread or all of numba's for the sweeps of one large solve, chosen by timing.
+
+    Two threads halve a sweep on an idle 2-core machine, but when other jobs hold the
+    cores, a parallel region waits for a descheduled thread and one thread is faster
+    (issue 17: a random MDP of 2,048,000 x 3 x 5 took 10.6 s on one thread and 13.7-14.7 s
+    on two with one core busy). Each kind of sweep (improvement, evaluation) is timed on
+    its own: its sweeps ``1..2 * SAMPLES`` alternate between the two counts (sweep 0 pays
+    first-touch page faults and is not timed), the count with the lower mean is kept, and
+    every :attr:`RECHECK` sweeps of the kind the other count is timed again and taken if
+    faster by :attr:`MARGIN` (the load changes). Sweeps below :data:`SERIAL_SWEEP_READS`
+    always run on one thread (:func:`_threads_for`). The thread count changes no number:
+    every state's value is computed by the same arithmetic on whichever thread, and the
+    residual extremes are exact minima and maxima.
+    """
+
+    SAMPLES: int = 2
+    RECHECK: int = 16
+    MARGIN: float = 0.9
+
+    def __init__(self, ops: BellmanRows | PostDecisionRows) -> None:
+        self.many = 1
+        if ops.compiled and _sweep_reads(ops) >= SERIAL_SWEEP_READS:
+            import numba
+
+            self.many = numba.get_num_threads()
+        self.current = self.many
+        self.count: dict[str, int] = {}  # sweeps of each kind so far
+        self.times: dict[tuple[str, int], list[float]] = {}
+        self.chosen: dict[str, int] = {}
+
+    def start(self, kind: str) -> int:
+        """Set numba's thread count for the next sweep of ``kind``; returns it."""
+        if self.many == 1:
+            return 1
+        i = self.count.get(kind, 0)
+        chosen = self.chosen.get(kind, self.many)
+        if 1 <= i <= 2 * self.SAMPLES:
+            want = 1 if i % 2 else self.many
+        elif i > 2 * self.SAMPLES and i % self.RECHECK == 0:
+            want = 1 if chosen != 1 else self.many
+        else:
+            want = chosen
+        self._set(want)
+        return want
+
+    def stop(self, kind: str, threads: int, seconds: float) -> None:
+        """Record the time of the sweep of ``kind`` just run on ``threads``."""
+        if self.many == 1:
+            return
+        i = self.count.get(kind, 0)
+        self.count[kind] = i + 1
+        if i == 0:
+            return
+        mine = self.times.setdefault((kind, threads), [])
+        if i <= 2 * self.SAMPLES:
+            mine.append(seconds)
+            if i == 2 * self.SAMPLES:
+                self.chosen[kind] = min((self.many, 1), key=lambda k: self._mean(kind, k))
+            return
+        chosen = self.chosen.get(kind, self.many)
+        last = self.times.get((kind, chosen), [np.inf])[-1]
+        if threads != chosen and seconds < self.MARGIN * last:
+            self.chosen[kind] = threads
+        mine.append(seconds)
+
+    def _mean(self, kind: str, threads: int) -> float:
+        return float(np.mean(self.times.get((kind, threads)) or [np.inf]))
+
+    def _set(self, k: int) -> None:
+        if k != self.current:
+            import numba
+
+            numba.set_num_threads(k)
+            self.current = k
+
+    def restore(self) -> None:
+        """Back to numba's thread count at the start."""
+        self._set(self.many)
+
+
 def _offset_step(
     lam: float, c: float, lo: float, hi: float, extrapolate: bool
 ) -> tuple[float, float, float]:
@@ -579,28 +660,38 @@ def _iterate(
         assert isinstance(rows, BellmanRows)
         maxmin = rows._sweep_maxmin
     c = 0.0
-    for it in range(max_iter + 1):
-        if maxmin is not None:
-            lo, hi = maxmin(u, buf, arg)
-        else:
-            lo, hi = rows._sweep_max(u, buf, arg, nchunks, **kw)
-        sweeps += 1
-        lo, hi, c_next = _offset_step(lam, c, lo, hi, extrapolate)
-        res = max(-lo, hi)
-        hist.append(res)
-        if callback is not None:
-            callback(it, res)
-        if res <= tol:
-            return u + c, arg, res, it, sweeps, True, hist
-        if it == max_iter:
-            break
-        c = c_next
-        u, buf = buf, u
-        for _ in range(eval_sweeps):
-            lo, hi = rows._sweep_policy(arg, u, buf, nchunks, **kw)
+    threads = _ThreadChoice(rows)
+    try:
+        for it in range(max_iter + 1):
+            k = threads.start("max")
+            t = time.perf_counter()
+            if maxmin is not None:
+                lo, hi = maxmin(u, buf, arg)
+            else:
+                lo, hi = rows._sweep_max(u, buf, arg, nchunks, **kw)
+            threads.stop("max", k, time.perf_counter() - t)
             sweeps += 1
-            _, _, c = _offset_step(lam, c, lo, hi, extrapolate)
+            lo, hi, c_next = _offset_step(lam, c, lo, hi, extrapolate)
+            res = max(-lo, hi)
+            hist.append(res)
+            if callback is not None:
+                callback(it, res)
+            if res <= tol:
+                return u + c, arg, res, it, sweeps, True, hist
+            if it == max_iter:
+                break
+            c = c_next
             u, buf = buf, u
+            for _ in range(eval_sweeps):
+                k = threads.start("policy")
+                t = time.perf_counter()
+                lo, hi = rows._sweep_policy(arg, u, buf, nchunks, **kw)
+                threads.stop("policy", k, time.perf_counter() - t)
+                sweeps += 1
+                _, _, c = _offset_step(lam, c, lo, hi, extrapolate)
+                u, buf = buf, u
+    finally:
+        threads.restore()
     return u + c, arg, res, max_iter, sweeps, False, hist
 
 
