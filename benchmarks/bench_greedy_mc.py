@@ -3,14 +3,16 @@
 For each model, in a fresh process: the partition bounds (LBLP ``w*``, UBLP ``v*``, fixed
 points with certified errors), the Monte Carlo value of ``pi_s`` (greedy for ``w*``,
 acted out on the fly) from :func:`lpbounds.patrol.greedy_mc.default_starts` (the ``m``
-empty stations and 12 seeded random states; 10,000 paths each, horizon with truncation
-error <= 1e-6, Student's t 95 %), and Table 1 (5 seeds x 60,000 steps, as at 4
-stations), with wall times and the process's peak RSS. Then the compiled Monte Carlo's
-thread scaling at 8 stations: 2 threads against 1, alternating, same work.
+empty stations and 12 seeded random states; 4,000 paths each with the control variate,
+horizon with truncation error <= 1e-6, Student's t 95 %), and Table 1 (5 seeds x 60,000
+steps, as at 4 stations), with wall and CPU times and the process's peak RSS. On the
+paper's instance the exact ``V_pis`` (``evaluate_policy`` on its MDP) checks the
+intervals. Then, at 8 stations, the estimator with and without the control variate side
+by side (alternating, same paths): CPU time and variance.
 
 Writes the ``greedy-mc`` section of docs/benchmarks.md and benchmarks/results/greedy_mc.json.
 
-    python benchmarks/bench_greedy_mc.py [--paths 10000] [--models ...] [--reps 3]
+    python benchmarks/bench_greedy_mc.py [--paths 4000] [--models ...] [--reps 3]
 
 The paper's 4-station instance runs too: its Table 1 row must match the MDP-array run of
 ``lpbounds reproduce`` (pi_s: 4.70 loiters, mean delay 4.69, worst 14).
@@ -50,6 +52,18 @@ b = g.partition_bounds(params)
 cpu = time.process_time()
 est = g.greedy_value_mc(params, b.lower, b.upper, paths={paths}, upper_error=b.upper_error)
 mc_cpu = time.process_time() - cpu
+exact = None
+if params.n_states <= 3_000_000:  # the paper's instance: the exact V_pis to check against
+    from lpbounds import evaluate_policy, greedy_policy
+    from lpbounds.patrol import PatrolModel
+    pm = PatrolModel(params)
+    mdp = pm.mdp()
+    pol = greedy_policy(mdp, b.lower[pm.partition().labels])
+    v = evaluate_policy(mdp, pol, method="iterative").values[est.starts]
+    exact = {{"values": v.tolist(),
+             "covered": int(((est.ci_low <= v) & (v <= est.ci_high)).sum()),
+             "max_abs_error": float(np.abs(est.mean - v).max())}}
+    del mdp, pm
 t = time.perf_counter()
 tab = g.greedy_table1(params, b.lower)
 tab_s = time.perf_counter() - t
@@ -59,14 +73,13 @@ print(json.dumps({{
     "model": name, "n_states": params.n_states, "n_partitions": params.n_partitions,
     "m": params.m, "compile_s": compile_s, "bounds_s": b.seconds,
     "lower_error": b.lower_error, "upper_error": b.upper_error,
-    "mc": est.summary(), "mc_md": est.markdown(), "mc_cpu_s": mc_cpu,
+    "mc": est.summary(), "mc_md": est.markdown(), "mc_cpu_s": mc_cpu, "exact": exact,
     "table1_s": tab_s, "table1": tab.summary(), "table1_md": g.table1_markdown({{name: tab}}),
 }}))
 """
 
-THREADS = """
+CONTROL = """
 import json, time
-import numba
 import numpy as np
 from lpbounds.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
@@ -74,16 +87,16 @@ from lpbounds.patrol import greedy_mc as g
 params = params_from_instance(load_instance("patrol-m8"))
 b = g.partition_bounds(params)
 g.greedy_value_mc(params, b.lower, b.upper, starts=8, paths=10, horizon=5)  # compile
-out = {{"1": [], "2": []}}
-cpu = {{"1": [], "2": []}}
+out = {{"on": [], "off": []}}
+std = {{}}
 for rep in range({reps}):
-    for nt in (2, 1):
-        numba.set_num_threads(nt)
+    for key in ("on", "off"):
         c = time.process_time()
-        est = g.greedy_value_mc(params, b.lower, b.upper, starts=8, paths={paths})
-        out[str(nt)].append(est.seconds)
-        cpu[str(nt)].append(time.process_time() - c)
-print(json.dumps({{"seconds": out, "cpu": cpu, "steps": 8 * {paths} * est.horizon}}))
+        est = g.greedy_value_mc(params, b.lower, b.upper, starts=8, paths={paths},
+                                control_variate=key == "on")
+        out[key].append(time.process_time() - c)
+        std[key] = est.std.tolist()
+print(json.dumps({{"cpu": out, "std": std, "steps": 8 * {paths} * est.horizon}}))
 """
 
 
@@ -119,23 +132,37 @@ def _fmt_certificate(r: dict) -> str:
     return head + "\n\n" + r["mc_md"]
 
 
+def _fmt_exact(runs: list[dict]) -> str:
+    """Where the exact V_pis exists (the paper's instance): how the intervals did."""
+    out = []
+    for r in runs:
+        if r.get("exact"):
+            e, mc = r["exact"], r["mc"]
+            out.append(
+                f"Check on {r['model']} (exact V_pis by evaluate_policy on its MDP): the "
+                f"{mc['level']:.0%} intervals cover it at {e['covered']} of {mc['n_starts']} "
+                f"starts; max |mean - V_pis| = {e['max_abs_error']:.1e}."
+            )
+    return "\n\n".join(out) or "(no instance small enough for the exact check)"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--paths", type=int, default=10_000)
+    ap.add_argument("--paths", type=int, default=4_000)
     ap.add_argument("--models", nargs="*", default=["patrol-paper", M6, "patrol-m8"])
-    ap.add_argument("--reps", type=int, default=3, help="repetitions of the thread comparison")
-    ap.add_argument("--thread-paths", type=int, default=2_000)
+    ap.add_argument("--reps", type=int, default=3, help="repetitions of the side-by-side run")
+    ap.add_argument("--cv-paths", type=int, default=2_000)
     args = ap.parse_args()
     load0 = os.getloadavg()
     t0 = time.time()
     runs = [run_isolated(RUN.format(model=m, paths=args.paths), timeout=3600) for m in args.models]
-    thr = run_isolated(THREADS.format(reps=args.reps, paths=args.thread_paths), timeout=3600)
+    cv = run_isolated(CONTROL.format(reps=args.reps, paths=args.cv_paths), timeout=3600)
     load1 = os.getloadavg()
-    t1, t2 = statistics.median(thr["seconds"]["1"]), statistics.median(thr["seconds"]["2"])
-    c1, c2 = statistics.median(thr["cpu"]["1"]), statistics.median(thr["cpu"]["2"])
+    c_on, c_off = statistics.median(cv["cpu"]["on"]), statistics.median(cv["cpu"]["off"])
+    ratio = [(a / b) ** 2 for a, b in zip(cv["std"]["off"], cv["std"]["on"], strict=True)]
     meta = {"machine": machine(), "date": today(), "load_before": load0, "load_after": load1}
     RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps({"meta": meta, "runs": runs, "threads": thr}, indent=1) + "\n")
+    RESULTS.write_text(json.dumps({"meta": meta, "runs": runs, "control": cv}, indent=1) + "\n")
     body = "\n\n".join(
         [
             "## pi_s beyond exact DP: Monte Carlo value and Table 1 "
@@ -145,11 +172,12 @@ def main() -> None:
             "process; compiled kernels (numba, prange over paths), first compile excluded "
             "(done on a small model first).",
             _fmt_table(runs),
-            f"Thread scaling at 8 stations (8 starts x {args.thread_paths:,} paths, "
-            f"{thr['steps']:,} steps, alternating, median of {args.reps}): 1 thread "
-            f"{t1:.2f} s wall ({c1:.2f} s CPU), 2 threads {t2:.2f} s wall ({c2:.2f} s CPU), "
-            f"wall ratio {t1 / t2:.2f}. CPU per step is what to compare under load: a wall "
-            "ratio near 1 with equal CPU means the machine gave the process no second core.",
+            f"Control variate at 8 stations, side by side (8 empty-station starts x "
+            f"{args.cv_paths:,} paths, {cv['steps']:,} steps each way, alternating, median of "
+            f"{args.reps}): CPU {c_on:.2f} s with, {c_off:.2f} s without (ratio "
+            f"{c_on / c_off:.2f}); variance ratio (without / with) {min(ratio):.0f}-"
+            f"{max(ratio):.0f}, i.e. that many times fewer paths for the same interval.",
+            _fmt_exact(runs),
             "Table 1 of pi_s (5 seeds x 60,000 steps; the 4-station conventions: delay to the "
             "first loiter, uncapped; in brackets counted to the end of the first loiter):",
             "\n".join(

@@ -7,9 +7,9 @@ with respect to the lower bound ``w*`` lifted to states (``V_low(x) = w*(i(x))``
 eq. 30), one state at a time:
 
 * the successors of a state come from the model's own compiled dynamics
-  (:func:`lpbounds.patrol.model._successor_kernel`), their components from its decoder
-  (``_decode_kernel``) and their partitions from
-  :func:`lpbounds.patrol.partitions.state_partition_kernel`;
+  (``lpbounds.patrol.model._successor_kernel``), their components from its decoder
+  (``_decode_kernel``) and their partitions from the compiled key index of
+  :mod:`lpbounds.patrol.partitions` (``alert_key_kernel``, ``key_index_kernel``);
 * ``Q(x, u) = R_u(x) + lambda sum_l p_l w*(i(f(x, u, Y_l)))`` is summed in outcome
   order exactly as :func:`lpbounds.dp.greedy_policy` sums it, and the action is chosen
   with its tie rule (every action within
@@ -30,7 +30,11 @@ the statistical certificate, at that level for each start separately:
     ``V*(x) - V_pis(x) <= v*(i(x)) + err(v*) - V_hat(x) + half-width + trunc``.
 
 The intervals hold for each start at the stated level, not simultaneously (for that,
-pass ``level = 1 - 0.05 / n_starts``, Bonferroni).
+pass ``level = 1 - 0.05 / n_starts``, Bonferroni). The certificate takes ``V* <= v*``
+from Theorem 4 (UBLP = RLP, whose optimum bounds ``V*`` from above); lpbounds checks that
+with certificates wherever ``V*`` is computable (4 stations in ``lpbounds reproduce``,
+5 and 6 with ``--beyond``), but at 8 stations it is the theorem's claim, not a checked
+fact (the theorem rests on Claim 2, which fails on a few pairs at 4 stations).
 
 Control variate (default on). Each path's return has subtracted
 
@@ -40,7 +44,7 @@ Control variate (default on). Each path's return has subtracted
 expectation of ``w(x_(t+1))``; the greedy step computes it anyway), so ``E[G_H - C] =
 E[G_H]``: the same estimand, the same truncation bound, and the paths stay independent,
 so the t interval applies unchanged. ``G_H - C`` telescopes to ``w(x_0)`` plus the
-discounted one-step errors ``R + lambda E w(x') - w(x)`` along the path (plus the end
+discounted one-step errors ``R + lambda E w(x') - w(x)`` along the path (minus the end
 term ``lambda^H w(x_H)``), whose spread is that of ``w``'s Bellman residual, not of the
 alert stream: much smaller when ``w*`` is close to ``V_pis``.
 
@@ -149,7 +153,6 @@ class _Kernel:
     inc: np.ndarray
     rho: float
     discount: float
-    m: int
 
     @classmethod
     def of(cls, params: PatrolParams) -> _Kernel:
@@ -167,7 +170,6 @@ class _Kernel:
             inc=np.ascontiguousarray(params.information_increments(), dtype=np.float64),
             rho=float(params.rho),
             discount=float(params.discount),
-            m=params.m,
         )
 
     def args(self) -> tuple[Any, ...]:
