@@ -255,6 +255,17 @@ def test_bad_input_names_the_argument(kwargs, match):
         greedy_value_mc(params, lower, upper, **args)
 
 
+def test_params_must_be_patrol_params():
+    for call in (
+        lambda: partition_bounds({"N": 6}),
+        lambda: greedy_actions("patrol-small", np.zeros(3), [0]),
+        lambda: default_starts(None),
+        lambda: truncation_bound(3, 10),
+    ):
+        with pytest.raises(ValidationError, match="params must be a PatrolParams"):
+            call()
+
+
 def test_bad_outcomes_and_start():
     params = SMALL["small"]
     with pytest.raises(ValidationError, match=r"outcomes\[1\] = 3"):

@@ -127,6 +127,7 @@ class PartitionBounds:
 
 def partition_bounds(params: PatrolParams) -> PartitionBounds:
     """``w*`` and ``v*`` from the partitions alone (as ``lpbounds bounds`` computes them)."""
+    _params(params)
     t0 = time.perf_counter()
     low = solve_exact(patrol_rows(params, "lower"))
     up = solve_exact(patrol_rows(params, "upper"))
@@ -349,8 +350,16 @@ def _trajectory_kernel(x0, outcomes, lower, mt, states, actions):  # pragma: no 
 
 
 # ---------------------------------------------------------------------- inputs
+def _params(params: Any) -> PatrolParams:
+    """Refuse anything but :class:`PatrolParams` (a typed error, not an AttributeError)."""
+    if not isinstance(params, PatrolParams):
+        raise ValidationError(f"params must be a PatrolParams; got {type(params).__name__}")
+    return params
+
+
 def _lower(params: PatrolParams, lower: Any, name: str = "lower") -> np.ndarray:
     """A partition value vector (length M, finite), as the kernels read it."""
+    _params(params)
     return check_vector(name, lower, params.n_partitions)
 
 
@@ -374,7 +383,7 @@ def reward_absmax(params: PatrolParams) -> float:
     ``R`` is ``-rho min(taubar, Gamma)``, plus ``I(d+1) - I(d)`` for a loiter at dwell
     ``d``: affine in ``taubar``, so the extremes are at ``taubar = 0`` or ``Gamma``.
     """
-    pen = params.rho * params.Gamma
+    pen = _params(params).rho * params.Gamma
     inc = np.abs(params.information_increments())
     shifted = np.abs(params.information_increments() - pen)
     return float(max(pen, inc.max(initial=0.0), shifted.max(initial=0.0)))
@@ -383,6 +392,7 @@ def reward_absmax(params: PatrolParams) -> float:
 def truncation_bound(params: PatrolParams, horizon: int) -> float:
     """``lambda^H max|R| / (1 - lambda)``: how far a return cut at ``H`` steps can be from
     the infinite-horizon one, on every path."""
+    _params(params)
     horizon = check_int("horizon", horizon, lo=1)
     lam = params.discount
     return float(lam**horizon * reward_absmax(params) / (1.0 - lam))
@@ -390,6 +400,7 @@ def truncation_bound(params: PatrolParams, horizon: int) -> float:
 
 def default_horizon(params: PatrolParams, target: float = TRUNCATION_TARGET) -> int:
     """The smallest horizon whose :func:`truncation_bound` is at most ``target``."""
+    _params(params)
     target = check_real("target", target, lo=0.0, lo_open=True)
     lam, rmax = params.discount, reward_absmax(params)
     if lam == 0.0 or rmax == 0.0:
@@ -407,6 +418,7 @@ def default_starts(params: PatrolParams, *, n_random: int = 12, seed: int = 0) -
     (``l = stations[k], w = +1, d = 0, tau = 0``), then ``n_random`` state indices drawn
     uniformly from ``[0, |S|)`` (``numpy.random.default_rng(seed)``; duplicates kept).
     """
+    _params(params)
     n_random = check_int("n_random", n_random, lo=0)
     seed = check_int("seed", seed, lo=0)
     pm = PatrolModel(params)
