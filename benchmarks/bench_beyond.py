@@ -135,6 +135,39 @@ def size_row(r: dict) -> str:
     )
 
 
+def progress_note(name: str, cache: Path, done: list[dict]) -> str:
+    """A size still running (or stopped) before its V*: the improvement steps in its log,
+    their seconds, and the total extrapolated with the step counts of the largest finished
+    size (the same MPI: 1 max + 5 evaluation sweeps a step)."""
+    import re
+
+    log = cache / f"{name}.log"
+    if not log.is_file():
+        return f"{name}: no result and no log."
+    steps = [
+        (int(m.group(1)), float(m.group(2)), float(m.group(3)))
+        for m in re.finditer(r"V\* iteration (\d+): residual (\S+) \((\d+) s\)", log.read_text())
+    ]
+    if len(steps) < 2:
+        return f"{name}: V* not past its first improvement step yet (log: {log})."
+    per_step = (steps[-1][2] - steps[0][2]) / (steps[-1][0] - steps[0][0])
+    text = (
+        f"{name}: V* stopped before convergence after {steps[-1][0] + 1} improvement steps "
+        f"(residual {steps[-1][1]:.2e}) in {steps[-1][2]:.0f} s; {per_step:.0f} s per step "
+        f"(1 max + 5 evaluation sweeps: {per_step / 6:.0f} s per sweep)"
+    )
+    if done:
+        ref = max(done, key=lambda r: r["n_states"])
+        its = ref["vstar"]["iterations"] + 1
+        ev = ref["policy"]["vsub_sweeps"] + 1
+        total = per_step * its + per_step / 6 * ev
+        text += (
+            f"; at this speed, with the {its} steps and {ev} evaluation sweeps of "
+            f"{ref['instance']}, V* and V_sub would take about {total / 3600:.1f} h"
+        )
+    return text + "."
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--sizes", type=int, nargs="*", default=[5, 6])
@@ -142,6 +175,11 @@ def main() -> None:
     ap.add_argument("--reuse", action="store_true", help="keep results already in --cache")
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--no-paper", action="store_true", help="skip the paper-instance comparison")
+    ap.add_argument(
+        "--progress-only",
+        action="store_true",
+        help="run no size: the finished ones from --cache, the others' progress from their logs",
+    )
     args = ap.parse_args()
     cache = Path(args.cache)
     cache.mkdir(parents=True, exist_ok=True)
@@ -150,10 +188,16 @@ def main() -> None:
     load.append(uptime())
     from lpbounds.patrol.beyond import BEYOND_MODELS
 
-    results = []
+    results, notes = [], []
     for m in args.sizes:
         name = BEYOND_MODELS[m]
         path = cache / f"{name}.json"
+        if args.progress_only:
+            if path.is_file():
+                results.append(json.loads(path.read_text()))
+            else:
+                notes.append(progress_note(name, cache, results))
+            continue
         r = json.loads(path.read_text()) if args.reuse and path.is_file() else run_size(name, cache)
         results.append(r)
         load.append(uptime())
@@ -181,6 +225,8 @@ sweep (all sweeps, improvement and evaluation), the greedy pass (pi_s and the ga
 
 {TABLE_HEAD}
 {chr(10).join(size_row(r) for r in results)}
+
+{chr(10).join(notes)}
 """
     write_section("beyond", body)
     print(body)

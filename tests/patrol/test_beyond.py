@@ -177,7 +177,8 @@ def test_the_sentence_on_the_tighter_side():
     assert s.startswith("The lower bound w* is the tighter one at every size")
     assert "0.25 at m = 4" in s and "0.20 at m = 5" in s
     assert tighter_side([_fake(4, 0.1, 0.3)]).startswith("The upper bound v*")
-    assert "at m = [5] only" in tighter_side([_fake(4, 0.1, 0.3), _fake(5, 0.4, 0.1)])
+    mixed = tighter_side([_fake(4, 0.1, 0.3), _fake(5, 0.4, 0.1)])
+    assert "at m = 5 only" in mixed and "at m = 4, 5 (of 4, 5)" in mixed
 
 
 def test_section_figure_and_json(result, tmp_path):
@@ -216,3 +217,38 @@ def test_reproduce_beyond_writes_the_section(result, tmp_path, monkeypatch):
     assert data["sizes"][0]["source"].startswith("array path")
     assert all(c["verdict"] == "holds" for c in data["sizes"][0]["checks"].values())
     assert rep.out == tmp_path / "out"
+
+
+def test_reproduce_beyond_refuses_other_sizes_before_computing(tmp_path):
+    from lpbounds.errors import ValidationError
+
+    with pytest.raises(ValidationError, match=r"beyond_sizes must be 5, 6 or both; got \[4\]"):
+        reproduce("models/patrol-small.toml", tmp_path / "out", beyond=True, beyond_sizes=[4])
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_array_path_row_must_find_the_runs_policy():
+    """``study_from_arrays`` recomputes pi_s and refuses a run whose pi_s differs."""
+    from lpbounds.dp import PolicyEvaluation
+    from lpbounds.errors import ConsistencyError
+    from lpbounds.patrol.beyond import study_from_arrays
+
+    params = PatrolParams(N=4, stations=(0, 2), D=2, Gamma=3)
+    pm = PatrolModel(params)
+    mdp = pm.mdp()
+    ref = solve_exact(mdp)
+    pb = partition_bounds(params)
+    from lpbounds import greedy_policy
+
+    pi_s = greedy_policy(mdp, pb.lower[pm.partition().labels]).astype(np.int8)
+    ev = evaluate_policy(mdp, pi_s, method="iterative")
+    summary = {"error_bound": ref.error_bound, "residual": ref.residual}
+    kw = dict(vstar=ref.values, vstar_summary=summary, pistar=ref.policy, bounds=pb, vsub=ev)
+    row = study_from_arrays(params, "tiny", pi_s=pi_s, **kw)
+    assert row.source.startswith("array path") and row.all_hold
+    assert row.policy["vsub_sweeps"] == ev.sweeps
+    wrong = pi_s.copy()
+    wrong[0] = 1 - wrong[0] if wrong[0] < 2 else 0
+    with pytest.raises(ConsistencyError, match="differs from the run's on 1 states"):
+        study_from_arrays(params, "tiny", pi_s=wrong, **kw)
+    assert isinstance(ev, PolicyEvaluation)

@@ -648,8 +648,6 @@ def from_reproduction(
 ) -> SizeResult:
     """The 4-station row from :func:`lpbounds.patrol.reproduce.reproduce`'s step results
     (``VStar``, ``Bounds``, ``SandwichAndPolicy``): nothing is solved again."""
-    from types import SimpleNamespace
-
     from ..dp import PolicyEvaluation
     from .greedy_mc import PartitionBounds
 
@@ -662,22 +660,8 @@ def from_reproduction(
         sweeps=pol.vsub_sweeps,
         seconds=float("nan"),
     )
-    summ = SimpleNamespace(**vars(vs.summary))
-    vstar_summary = {
-        k: getattr(summ, k)
-        for k in (
-            "method",
-            "iterations",
-            "sweeps",
-            "residual",
-            "error_bound",
-            "tol",
-            "seconds",
-            "min",
-            "max",
-            "mean",
-        )
-    }
+    keys = ("method", "iterations", "sweeps", "residual", "error_bound", "tol", "seconds")
+    vstar_summary = {k: getattr(vs.summary, k) for k in (*keys, "min", "max", "mean")}
     vstar_summary["status"] = "optimal"  # reproduce's solve_exact raises otherwise
     pb = PartitionBounds(
         lower=bounds.w_low,
@@ -813,6 +797,10 @@ def _gap_rows(rows: list[SizeResult]) -> list[list[Any]]:
     return out
 
 
+def _ms(ms: list[int]) -> str:
+    return ", ".join(str(m) for m in ms) if ms else "none"
+
+
 def tighter_side(rows: list[SizeResult]) -> str:
     """One sentence on which bound is the tighter one (by mean and by max) at each size."""
     low_mean = [r.m for r in rows if r.gaps["lower_mean"] < r.gaps["upper_mean"]]
@@ -823,11 +811,11 @@ def tighter_side(rows: list[SizeResult]) -> str:
     elif not low_mean:
         head = "The upper bound v* is the tighter one at every size, on average over states"
     else:
-        head = f"The lower bound w* is the tighter one on average at m = {low_mean} only"
+        head = f"The lower bound w* is the tighter one on average at m = {_ms(low_mean)} only"
     shares = ", ".join(f"{r.gaps['lower_share']:.2f} at m = {r.m}" for r in rows)
     return (
         f"{head} (V* - w* owns {shares} of the mean gap v* - w*); by the largest distance "
-        f"over states it is tighter at m = {low_max} of {sizes}."
+        f"over states it is the tighter one at m = {_ms(low_max)} (of {_ms(sizes)})."
     )
 
 
@@ -837,8 +825,11 @@ def report_section(
     """The markdown of the report's "Beyond the paper" section."""
     from .report import markdown_table
 
+    exact = [r.m for r in rows if r.m > 4]
     lines = [
-        "## Beyond the paper: exact V* at 5 and 6 stations, pi_s at 6 and 8\n",
+        f"## Beyond the paper: exact V* at {_ms(exact)} stations"
+        + (", pi_s by Monte Carlo at " + _ms([e["m"] for e in mc]) if mc else "")
+        + "\n",
         "The paper computes V* at 4 stations only. Here the same instance with 5 and 6 "
         "stations spread around the ring (`models/patrol-m5-paper.toml`, "
         "`models/patrol-m6-paper.toml`) is solved exactly by matrix-free sweeps "

@@ -876,6 +876,7 @@ def reproduce(
     n_examples: int = 10,
     beyond: bool = False,
     beyond_cache: str | Path = "out/beyond",
+    beyond_sizes: Sequence[int] = (5, 6),
 ) -> Reproduction:
     """Reproduce the paper's patrol results on one instance; write them into ``out``.
 
@@ -916,11 +917,13 @@ def reproduce(
         Also run the study beyond the paper's size (:mod:`lpbounds.patrol.beyond`): exact
         ``V*`` at 5 and 6 stations (matrix-free; the 4-station numbers are this run's),
         the greedy policy by Monte Carlo at 6 and 8 stations, and a "Beyond the paper"
-        section of the report with ``beyond.json`` and a figure. Long (the 6-station V*
-        takes tens of minutes and about 15 GB).
+        section of the report with ``beyond.json`` and a figure. Long: the 6-station
+        study needs about 15 GB and hours on 2 cores (``beyond_sizes``).
     beyond_cache : path
         Where the 5- and 6-station results are kept between runs (reused when the
         parameters are the same; the 6-station V* is checkpointed there).
+    beyond_sizes : sequence of int
+        The numbers of stations (5, 6 or both) solved exactly by ``beyond``.
 
     Returns
     -------
@@ -936,6 +939,9 @@ def reproduce(
         A computation failed (``out`` is left as it was).
     """
     seeds = _check_arguments(general, seeds, n_steps, n_examples)
+    sizes = tuple(beyond_sizes)
+    if beyond and (not sizes or any(m not in (5, 6) for m in sizes)):
+        raise ValidationError(f"beyond_sizes must be 5, 6 or both; got {list(sizes)}")
     solver = resolve_solver(solver)
     name, params = _load(model)
     t_start = time.perf_counter()
@@ -944,7 +950,7 @@ def reproduce(
     target = AtomicDirectory(outdir, replaceable=OUTPUT_FILES)
     with target as tmp:
         # the large sizes first, so that their memory is free before the MDP is built
-        bey_rows = _beyond_sizes(beyond_cache, tr) if beyond else []
+        bey_rows = _beyond_sizes(sizes, beyond_cache, tr) if beyond else []
         built, counts = build_model(params, tr)
         vs = solve_vstar(built, tr)
         bounds = solve_bounds(params, solver, tr)
@@ -998,11 +1004,11 @@ def reproduce(
     )
 
 
-def _beyond_sizes(cache: str | Path, tr: Tracker) -> list[Any]:
+def _beyond_sizes(sizes: tuple[int, ...], cache: str | Path, tr: Tracker) -> list[Any]:
     """``--beyond``: the 5- and 6-station studies (cached in ``cache``)."""
     from .beyond import run_sizes
 
-    return run_sizes((5, 6), cache, tr)
+    return run_sizes(sizes, cache, tr)
 
 
 def _beyond_section(
