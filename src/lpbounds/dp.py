@@ -534,7 +534,8 @@ class _ThreadChoice:
     (issue 17: a random MDP of 2,048,000 x 3 x 5 took 10.6 s on one thread and 13.7-14.7 s
     on two with one core busy). Each kind of sweep (improvement, evaluation) is timed on
     its own: its sweeps ``1..2 * SAMPLES`` alternate between the two counts (sweep 0 pays
-    first-touch page faults and is not timed), the count with the lower mean is kept, and
+    first-touch page faults and is not timed), all threads are kept if their mean is below
+    :attr:`PREFER` times one thread's (else one thread), and
     every :attr:`RECHECK` sweeps of the kind the other count is timed again and taken if
     faster by :attr:`MARGIN` (the load changes). Sweeps below :data:`SERIAL_SWEEP_READS`
     always run on one thread (:func:`_threads_for`). The thread count changes no number:
@@ -545,6 +546,11 @@ class _ThreadChoice:
     SAMPLES: int = 2
     RECHECK: int = 16
     MARGIN: float = 0.9
+    #: All threads are kept only when their mean sweep is this much faster than one
+    #: thread's: on a loaded machine their times scatter (a descheduled thread stalls the
+    #: region), and two lucky samples made the choice lose to one thread (patrol MPI, load
+    #: 7: one thread 3.8-4.9 s, all 6.7-9.4 s, a plain lower-mean choice 5.4-5.6 s).
+    PREFER: float = 0.85
 
     def __init__(self, ops: BellmanRows | PostDecisionRows) -> None:
         self.many = 1
@@ -584,7 +590,8 @@ class _ThreadChoice:
         if i <= 2 * self.SAMPLES:
             mine.append(seconds)
             if i == 2 * self.SAMPLES:
-                self.chosen[kind] = min((self.many, 1), key=lambda k: self._mean(kind, k))
+                fast = self._mean(kind, self.many) < self.PREFER * self._mean(kind, 1)
+                self.chosen[kind] = self.many if fast else 1
             return
         chosen = self.chosen.get(kind, self.many)
         last = self.times.get((kind, chosen), [np.inf])[-1]
