@@ -1,10 +1,13 @@
 r"""The highspy backend: ``min c'x s.t. A x >= b`` (x free) handed to HiGHS directly.
 
-:func:`highs_lp` is the one builder of a :class:`highspy.HighsLp` from a formulation's
-stored data ``(A, b, c)`` (``A`` CSR): rows ``b <= A x <= +inf``, columns free, the
-matrix passed column-wise (HiGHS' own storage, so ``passModel`` copies it without a
-transpose). :func:`quiet_highs` is :func:`lpbounds._quiet.quiet_highs` (a ``Highs``
-with its output off), re-exported so a caller needs one import.
+:func:`highs_lp` builds a :class:`highspy.HighsLp` from a formulation's stored data
+``(A, b, c)`` (``A`` CSR): rows ``b <= A x <= +inf``, columns free, the matrix column-wise
+(HiGHS' own storage). :func:`pass_lp` passes the same LP to a ``Highs`` through HiGHS'
+array interface (ten times faster than filling a ``HighsLp`` at 10M nonzeros).
+:func:`quiet_highs` is :func:`lpbounds._quiet.quiet_highs` (a ``Highs`` with its output
+off), re-exported so a caller needs one import. :class:`CvxpyHighs` is the cvxpy solver
+adapter the cvxpy path uses for HiGHS; :func:`run_highs`, :func:`set_options` and
+:func:`tight_basis` are the steps of one solve.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import scipy.sparse as sp
 from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as _CvxpyHIGHS
 
 from .._quiet import quiet_highs
-from ..errors import ValidationError
+from ..errors import SolverError, ValidationError
 from ..status import Status
 
 __all__ = [
@@ -27,6 +30,7 @@ __all__ = [
     "CvxpyHighs",
     "HighsRun",
     "highs_lp",
+    "pass_lp",
     "quiet_highs",
     "run_highs",
     "set_options",
@@ -54,30 +58,80 @@ def highs_lp(A: sp.spmatrix | sp.sparray, b: np.ndarray, c: np.ndarray) -> Any:
     """
     import highspy
 
-    a = sp.csc_matrix(A)
-    if not a.has_sorted_indices:
-        a = a.sorted_indices()
-    n_rows, n_cols = a.shape
-    bb = np.ascontiguousarray(b, dtype=np.float64)
-    cc = np.ascontiguousarray(c, dtype=np.float64)
-    if bb.shape != (n_rows,) or cc.shape != (n_cols,):
-        raise ValueError(f"A is {a.shape}, b {bb.shape}, c {cc.shape}")
-    inf = highspy.kHighsInf
+    d = _LpArrays.of(A, b, c)
     lp = highspy.HighsLp()
-    lp.num_col_ = int(n_cols)
-    lp.num_row_ = int(n_rows)
-    lp.col_cost_ = cc
-    lp.col_lower_ = np.full(n_cols, -inf)
-    lp.col_upper_ = np.full(n_cols, inf)
-    lp.row_lower_ = bb
-    lp.row_upper_ = np.full(n_rows, inf)
+    lp.num_col_ = d.n_cols
+    lp.num_row_ = d.n_rows
+    lp.col_cost_ = d.cost
+    lp.col_lower_ = d.col_lower
+    lp.col_upper_ = d.col_upper
+    lp.row_lower_ = d.row_lower
+    lp.row_upper_ = d.row_upper
     lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.num_col_ = int(n_cols)
-    lp.a_matrix_.num_row_ = int(n_rows)
-    lp.a_matrix_.start_ = a.indptr.astype(np.int32, copy=False)
-    lp.a_matrix_.index_ = a.indices.astype(np.int32, copy=False)
-    lp.a_matrix_.value_ = np.ascontiguousarray(a.data, dtype=np.float64)
+    lp.a_matrix_.num_col_ = d.n_cols
+    lp.a_matrix_.num_row_ = d.n_rows
+    lp.a_matrix_.start_ = d.start
+    lp.a_matrix_.index_ = d.index
+    lp.a_matrix_.value_ = d.value
     return lp
+
+
+@dataclass
+class _LpArrays:
+    """``min c'x s.t. row_lower <= A x <= row_upper, col_lower <= x <= col_upper`` as the
+    arrays HiGHS takes (``A`` column-wise, int32 indices)."""
+
+    n_rows: int
+    n_cols: int
+    cost: np.ndarray
+    col_lower: np.ndarray
+    col_upper: np.ndarray
+    row_lower: np.ndarray
+    row_upper: np.ndarray
+    start: np.ndarray
+    index: np.ndarray
+    value: np.ndarray
+
+    @classmethod
+    def of(cls, A: Any, b: Any, c: Any) -> _LpArrays:
+        """``A x >= b``, ``x`` free."""
+        import highspy
+
+        a = sp.csc_matrix(A)
+        if not a.has_sorted_indices:
+            a = a.sorted_indices()
+        n_rows, n_cols = a.shape
+        bb = np.ascontiguousarray(b, dtype=np.float64)
+        cc = np.ascontiguousarray(c, dtype=np.float64)
+        if bb.shape != (n_rows,) or cc.shape != (n_cols,):
+            raise ValueError(f"A is {a.shape}, b {bb.shape}, c {cc.shape}")
+        inf = highspy.kHighsInf
+        return cls(
+            int(n_rows), int(n_cols), cc, np.full(n_cols, -inf), np.full(n_cols, inf), bb,
+            np.full(n_rows, inf), a.indptr.astype(np.int32), a.indices.astype(np.int32),
+            np.ascontiguousarray(a.data, dtype=np.float64),
+        )  # fmt: skip
+
+    def pass_to(self, h: Any) -> None:
+        """``h.passModel`` from the arrays (numpy buffers: 10x faster than filling a
+        ``HighsLp``, whose vectors pybind11 converts element by element; 1 s against 10 s
+        for the paper's ELP). Raises :class:`SolverError` if HiGHS rejects the model."""
+        import highspy
+
+        status = h.passModel(
+            self.n_cols, self.n_rows, int(self.index.size), int(highspy.MatrixFormat.kColwise),
+            int(highspy.ObjSense.kMinimize), 0.0, self.cost, self.col_lower, self.col_upper,
+            self.row_lower, self.row_upper, self.start, self.index, self.value,
+            np.zeros(self.n_cols, dtype=np.int32),  # every column continuous
+        )  # fmt: skip
+        if status == highspy.HighsStatus.kError:
+            raise SolverError("HiGHS rejected the LP (passModel returned kError)")
+
+
+def pass_lp(h: Any, A: Any, b: Any, c: Any) -> None:
+    """Pass ``min c'x s.t. A x >= b`` (``x`` free) to the ``Highs`` object ``h``: the same LP
+    as :func:`highs_lp`, through HiGHS' array interface (no ``HighsLp`` in between)."""
+    _LpArrays.of(A, b, c).pass_to(h)
 
 
 # ---------------------------------------------------------------------------- one run
@@ -243,15 +297,13 @@ class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
             raise CvxpySolverError("HIGHS_ROWS solves LPs only")
         n_eq = int(dims_to_solver_dict(data[s.DIMS])[s.EQ_DIM])
         b = np.asarray(data[s.B], dtype=np.float64)
-        lp = highs_lp(-data[s.A], -b, data[s.C])
+        lp = _LpArrays.of(-data[s.A], -b, data[s.C])
         if n_eq:
-            upper = np.array(lp.row_upper_)
-            upper[:n_eq] = -b[:n_eq]
-            lp.row_upper_ = upper
+            lp.row_upper[:n_eq] = -b[:n_eq]
         if data.get(s.LOWER_BOUNDS) is not None:
-            lp.col_lower_ = np.asarray(data[s.LOWER_BOUNDS], dtype=np.float64)
+            lp.col_lower = np.asarray(data[s.LOWER_BOUNDS], dtype=np.float64)
         if data.get(s.UPPER_BOUNDS) is not None:
-            lp.col_upper_ = np.asarray(data[s.UPPER_BOUNDS], dtype=np.float64)
+            lp.col_upper = np.asarray(data[s.UPPER_BOUNDS], dtype=np.float64)
         h = quiet_highs()
         opts = dict(solver_opts)
         opts.update(opts.pop("highs_options", None) or {})
@@ -259,7 +311,7 @@ class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
             if not _option_ok(h, key, value):
                 raise ValueError(f"HIGHS rejected the option {key}={value!r}")
         h.setOptionValue("output_flag", bool(verbose))
-        h.passModel(lp)
+        lp.pass_to(h)
         h.run()
         sol = h.getSolution()
         self.model_status = h.getModelStatus().name

@@ -50,7 +50,7 @@ from ..status import Status
 from ..tolerances import LP_CERT_RTOL
 from ..validation import as_float_array, check_bool, check_int, check_real
 from ._highs import STATUS_MAP as HIGHS_STATUS
-from ._highs import CvxpyHighs, highs_lp, quiet_highs, run_highs, set_options
+from ._highs import CvxpyHighs, pass_lp, quiet_highs, run_highs, set_options
 
 # HiGHS prints its banner on stdout at the first Highs() of a process, whatever the options
 # (cvxpy passes log_to_console=verbose only afterwards). Take that first construction here,
@@ -494,7 +494,7 @@ def _canon(options: dict[str, Any]) -> dict[str, Any]:
 
 
 class HighspyBackend(Backend):
-    """highspy directly on ``(A, b, c)`` (:func:`~lpbounds.formulations._highs.highs_lp`).
+    """highspy directly on ``(A, b, c)`` (:func:`~lpbounds.formulations._highs.pass_lp`).
 
     HiGHS only, no extra constraints; options by HiGHS' own names (``time_limit``,
     ``highs_options={"solver": "ipm"}`` or ``solver``-free keys such as ``presolve="off"``);
@@ -519,7 +519,7 @@ class HighspyBackend(Backend):
         with solver_output(verbose) as verbose:
             h = quiet_highs()
             set_options(h, options, verbose)
-            h.passModel(highs_lp(form.A, form.b, form.c))
+            pass_lp(h, form.A, form.b, form.c)
             if basis is not None and h.setBasis(basis) == highspy.HighsStatus.kError:
                 raise SolverError(f"{form.name}: HiGHS rejected the starting basis")
             compile_s = time.perf_counter() - t0

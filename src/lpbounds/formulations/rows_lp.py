@@ -86,6 +86,12 @@ class RowsLP(Formulation):
         ``gap = |c'x - b'y|`` computed by lpbounds (``y >= 0`` is dual feasible up to
         ``dual_residual``, so ``b'y`` is a lower bound on the optimum up to it:
         ``objective_bracket`` uses it).
+
+        The route needs an LU factorisation of ``I - lambda P_pi`` without much fill-in.
+        The patrol problem's transitions make it cheap (the paper's ELP: 2,048,000
+        variables, factorised and checked in about 15 s); on a random garnet with 100,000
+        states HiGHS had not set the basis after 5 minutes (random sparse ``P``: the LU
+        fills in). Use an interior point method there.
         """
         dp = solve_exact(self.rows)
         return tight_basis(self.A.shape[0], self.A.shape[1], dp.policy_rows)
