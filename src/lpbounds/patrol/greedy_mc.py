@@ -208,7 +208,7 @@ def _buffers(m):  # pragma: no cover - compiled
     return cur, tau, succ, nl, nw, nd, ntau, q, wn, ev
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _decode_one(x, a, mt, buf):  # pragma: no cover - compiled
     """Decode state ``x`` into action ``a``'s successor slots (the model's decoder); it
     becomes ``succ[a, 0, 0]``."""
@@ -221,14 +221,14 @@ def _decode_one(x, a, mt, buf):  # pragma: no cover - compiled
     )  # fmt: skip
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _set_state(x, mt, buf):  # pragma: no cover - compiled
     """Make state ``x`` the current state of ``buf`` (action 0's slots as scratch)."""
     _decode_one(x, 0, mt, buf)
     _advance(0, -1, buf)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
     """``lambda sum_l p_l lower[i(f(x, a, Y_l))]`` summed in outcome order, as
     :func:`lpbounds.dp.greedy_policy` sums it; fills the action's successor slots.
@@ -262,7 +262,7 @@ def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
     return mt[8] * acc
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _greedy_step(lower, mt, buf):  # pragma: no cover - compiled
     """The greedy action at ``buf``'s current state and its reward ``R_u(x)``; fills the
     successor slots of every allowed action."""
@@ -289,7 +289,7 @@ def _greedy_step(lower, mt, buf):  # pragma: no cover - compiled
     return best_a, (pen + inc[d] if best_a == 2 else pen)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _advance(a, y, buf):  # pragma: no cover - compiled
     """Move to the successor of action ``a`` under outcome ``y`` (``y = -1``: the decoded
     state itself); return its index."""
