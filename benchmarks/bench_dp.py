@@ -5,6 +5,12 @@ for each method, each in a fresh process (so peak memory is that step's own), an
 writes the `foundation` section of docs/benchmarks.md.
 
     python benchmarks/bench_dp.py [--repeat 3] [--n 2048000]
+
+``--floor`` instead measures the patrol MDP's sweeps against the memory-bandwidth floor
+(issue 17): this machine's read and copy bandwidth (numba, 1 and all threads, arrays far
+larger than the caches), the compulsory bytes of an improvement and an evaluation sweep
+(every array the sweep touches, read or written once), and the sweeps' own times on one
+thread, all threads and the timed choice of ``lpbounds.dp``; writes ``dp-floor``.
 """
 
 from __future__ import annotations
@@ -35,11 +41,142 @@ print(json.dumps({{"seconds": t, "iterations": r.iterations, "sweeps": r.sweeps,
 """
 
 
+FLOOR = r"""
+import json, time, os, numpy as np, numba
+from numba import njit, prange
+import lpbounds as lb
+from lpbounds.dp import post_decision_rows
+from lpbounds.patrol import PatrolModel, PatrolParams
+
+@njit(parallel=True, fastmath=True)  # fastmath: a vectorised sum, bound by memory, not adds
+def read_sum(a):
+    s = 0.0
+    for i in prange(a.shape[0]):
+        s += a[i]
+    return s
+
+@njit(parallel=True)
+def copy(a, b):
+    for i in prange(a.shape[0]):
+        b[i] = a[i]
+
+def best(f, reps):
+    ts = []
+    for _ in range(reps):
+        t = time.perf_counter(); f(); ts.append(time.perf_counter() - t)
+    return min(ts), float(np.median(ts))
+
+many = numba.get_num_threads()
+a = np.random.default_rng(0).random(64 * 2**20 // 8 * 8)  # 512 MB
+b = np.empty_like(a)
+bw = {}
+for k in (1, many):
+    numba.set_num_threads(k)
+    read_sum(a); copy(a, b)
+    tr, _ = best(lambda: read_sum(a), 7)
+    tc, _ = best(lambda: copy(a, b), 7)
+    bw[k] = {"read": a.nbytes / tr / 1e9, "copy": 2 * a.nbytes / tc / 1e9}
+del a, b
+numba.set_num_threads(many)
+mdp = PatrolModel(PatrolParams()).mdp()
+ps = post_decision_rows(mdp)
+r = lb.solve_exact(mdp)
+v = r.values.copy()
+n = ps.n_vars
+out = np.empty(n); arg = ps.new_arg(); w = ps.new_work(); nc = ps._chunks()
+act = r.policy.astype(np.int8)
+codes = ps.reward_codes if ps.reward_codes is not None else ps.reward
+imp = (ps.outcomes.nbytes + w.nbytes  # ps_expect: outcomes read, W written
+       + v.nbytes  # v gathered (at least once)
+       + ps.first.nbytes + codes.nbytes + w.nbytes + v.nbytes + out.nbytes + arg.nbytes)
+pol = imp - arg.nbytes - (2 * ps.first.nbytes + 2 * codes.nbytes) // 3 + act.nbytes
+times = {}
+for k in sorted({1, many}):
+    numba.set_num_threads(k)
+    times[f"max/{k}"] = best(lambda: ps._sweep_max(v, out, arg, nc, w=w), 15)
+    times[f"policy/{k}"] = best(lambda: ps._sweep_policy(act, v, out, nc, w=w), 15)
+    t = time.perf_counter(); ps._k().ps_expect(ps.outcomes, ps.probs, v, w)
+    times[f"expect/{k}"] = best(lambda: ps._k().ps_expect(ps.outcomes, ps.probs, v, w), 15)
+numba.set_num_threads(many)
+solves = {}
+for name, fix in (("choice", None), ("one", 1), ("all", many)):
+    import lpbounds.dp as dpm
+    orig = dpm._ThreadChoice.start
+    def fixed(self, kind, k=fix):
+        self._set(min(k, self.many))
+        return self.current
+    if fix is not None:
+        dpm._ThreadChoice.start = fixed
+    ts = []
+    for _ in range(3):
+        t = time.perf_counter(); lb.solve_exact(mdp); ts.append(time.perf_counter() - t)
+    dpm._ThreadChoice.start = orig
+    solves[name] = ts
+print(json.dumps({"bw": bw, "imp_bytes": imp, "pol_bytes": pol, "times": times, "n": n,
+                  "n_post": ps.n_post, "solves": solves, "many": many,
+                  "load": os.getloadavg()}))
+"""
+
+
+def floor() -> None:
+    """The ``dp-floor`` section: the patrol sweeps against the bandwidth floor."""
+    import os
+
+    load0 = os.getloadavg()
+    r = run_isolated(FLOOR, timeout=1800)
+    bw = max(max(x["read"], x["copy"]) for x in r["bw"].values())
+    rows = []
+    for kind, nbytes in (("max", r["imp_bytes"]), ("policy", r["pol_bytes"])):
+        fl = nbytes / bw / 1e9 * 1e3
+        for k in sorted({1, r["many"]}):
+            best_, med_ = r["times"][f"{kind}/{k}"]
+            exp_ = r["times"][f"expect/{k}"][0]
+            rows.append(
+                f"| {'improvement' if kind == 'max' else 'evaluation'} | {k} | "
+                f"{nbytes / 1e6:.1f} | {fl:.1f} | {best_ * 1e3:.1f} | {med_ * 1e3:.1f} | "
+                f"{exp_ * 1e3:.1f} | **{best_ * 1e3 / fl:.1f}x** |"
+            )
+    bws = "; ".join(
+        f"{k} thread(s): read {x['read']:.1f} GB/s, copy {x['copy']:.1f} GB/s"
+        for k, x in r["bw"].items()
+    )
+    solves = ", ".join(f"{name} {min(ts):.2f}-{max(ts):.2f} s" for name, ts in r["solves"].items())
+    body = (
+        f"""## DP sweeps against the memory-bandwidth floor (patrol MDP)
+
+Machine: {machine()}. Date: {today()}. Load average at start {load0[0]:.2f}, at end
+{r["load"][0]:.2f} (2 cores; above 2 other jobs shared them).
+
+Bandwidth (numba loops over 512 MB arrays, best of 7): {bws}. The floor of a sweep is
+its compulsory bytes (every array it touches read or written once: outcomes, W twice, v
+twice, first, reward codes, out, the actions) over the best bandwidth measured
+({bw:.1f} GB/s). Model: {r["n"]:,} states, {r["n_post"]:,} post-decision states. Sweep
+times: best and median of 15; "of which W" is the first of the sweep's two loops alone
+(`ps_expect`: 5 gathers of v per post-decision state), the rest is the max (or the
+policy's pick) over the pairs, 3 gathers of W per state.
+
+| sweep | threads | MB | floor ms | best ms | median ms | of which W (best ms) | best / floor |
+|---|---|---|---|---|---|---|---|
+"""
+        + "\n".join(rows)
+        + f"""
+
+Whole MPI solves (3 each, alternating): {solves} ("choice": the timed thread choice of
+`lpbounds.dp._ThreadChoice`; "one"/"all": a fixed count).
+"""
+    )
+    write_section("dp-floor", body)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--n", type=int, default=2_048_000)
+    ap.add_argument("--floor", action="store_true", help="the patrol sweeps vs bandwidth")
     args = ap.parse_args()
+    if args.floor:
+        floor()
+        return
     n = args.n
     builds = [run_isolated(BUILD.format(n=n)) for _ in range(args.repeat)]
     rows = []

@@ -30,7 +30,12 @@ self-loop preconditioned, products from the policy sweep with zero rewards) stop
 ``max(IPI_FORCING * res, tol / 2)`` in the max norm. The stopping rule and certificate
 are those above: the residual of the returned vector is measured by a full sweep, so the
 evaluation's accuracy only affects speed. It is opt-in: measured against MPI (sweep
-equivalents; improvement sweeps plus GMRES products, 2 cores) it never won:
+equivalents; improvement sweeps plus GMRES products, 2 cores) it lost on every large
+model and won only on small slow-mixing ones:
+
+* the ported peer test models (tests/interop): pymdptoolbox's forest with 1,000 states
+  and discount 0.99, MPI 157 sweeps (44 ms), IPI 57 (26 ms); MDPSolver's test 1
+  (discount 0.98): 31 against 11 sweeps, 0.56 against 0.44 ms;
 
 * garnet 100,000 x 3 x 5, discount 0.9: MPI 55 sweeps, IPI 123 (a random MDP mixes
   fast; with the Porteus shift an evaluation sweep already contracts by ~0.45);
@@ -41,8 +46,9 @@ equivalents; improvement sweeps plus GMRES products, 2 cores) it never won:
   IPI 16,042 (32 s): PI's outer steps move the policy along the chain one stretch at a
   time, so GMRES's faster evaluations are spent on policies about to change.
 
-So :func:`solve_exact` never picks it; the measurements are rerun by
-``benchmarks/bench_peers.py``.
+So :func:`solve_exact` does not pick it by itself (a rule that pays only below a
+millisecond is not worth a second default path); the measurements are rerun by
+``benchmarks/bench_peers.py --dp``.
 
 Fast path
 ---------
@@ -326,7 +332,7 @@ def solve_exact(
         within :data:`~lpbounds.tolerances.GREEDY_TIE_RTOL`), or inexact policy
         iteration (each greedy policy evaluated by GMRES to a fraction of the Bellman
         residual: see "Inexact policy iteration" in the module docstring; it is never
-        chosen for you: MPI was faster on every model measured).
+        chosen for you: MPI was faster on every large model measured).
     tol : float, optional
         Stop when ``||T V - V||_inf <= tol``; default ``1e-10 * max|R| / (1 - lambda)``.
     max_iter : int
