@@ -10,6 +10,14 @@ lpbounds on the returned vector, against the target 1e-10 max|R|/(1-discount).
 Writes the ``peers`` section of docs/benchmarks.md.
 
     python benchmarks/bench_peers.py [--repeat 3] [--quick]
+
+``--dp`` runs the exact-DP comparison of issue 17 instead (section ``peers-dp``): lpbounds'
+default solve, its inexact policy iteration, a 30-line scipy MPI loop, QuantEcon's
+DiscreteDP (state-action form, MPI) and mdpsolver on the patrol MDP, a random MDP of the
+paper's shape (2,048,000 x 3 x 5) and a mid-size one, alternating within each repetition.
+Every answer's Bellman residual is measured by lpbounds after the clock stops.
+
+    python benchmarks/bench_peers.py --dp [--repeat 3] [--models patrol garnet-paper ...]
 """
 
 from __future__ import annotations
@@ -23,6 +31,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from _common import machine, run_isolated, today, write_section
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -330,6 +339,341 @@ print(json.dumps({{"seconds": ts, "child_peak_mb": peak, "rc": p.returncode,
 """
 
 
+# ---------------------------------------------------------------------- exact DP (issue 17)
+# Each task is a fresh process. "seconds" is the solve alone (model in memory, in the
+# tool's own format); "whole" is from the launch of the process to the answer (interpreter
+# start-up, imports, model build, conversion, solve), taken by the parent's clock and the
+# child's wall-clock stamp when the solve returns (the residual check comes after).
+DP_MODELS = {
+    "patrol": "the paper's patrol MDP (2,048,000 x 3 x 5, discount 0.9)",
+    "garnet-paper": "random MDP of the paper's shape (garnet 2,048,000 x 3 x 5, discount 0.9)",
+    "garnet-mid": "mid-size random MDP (garnet 256,000 x 3 x 5, discount 0.9)",
+}
+DP_BUILD = """
+import time, json, numpy as np
+KIND = {kind!r}
+def build_arrays():
+    # successors, probabilities, rewards, allowed, discount (garnets: the same draws as
+    # lpbounds.garnet(n, 3, 5, 0.9, seed=2048, shared_probabilities=True), in plain numpy,
+    # so a peer's process does not import lpbounds before its answer)
+    if KIND == "patrol":
+        from lpbounds.patrol import PatrolModel, PatrolParams
+        m = PatrolModel(PatrolParams()).mdp()
+        return m.successors, np.asarray(m.probabilities), m.rewards, m.allowed, m.discount
+    n = 2_048_000 if KIND == "garnet-paper" else 256_000
+    rng = np.random.default_rng(2048)
+    succ = rng.integers(0, n, size=(n, 3, 5)).astype(np.int32)
+    cuts = np.sort(rng.random((4,)))
+    probs = np.diff(np.concatenate([[0.0], cuts, [1.0]]))
+    rew = rng.uniform(0.0, 1.0, size=(n, 3))
+    return succ, probs, rew, np.ones((n, 3), dtype=bool), 0.9
+def target(rew, allowed, lam):
+    return 1e-10 * float(np.abs(rew[allowed]).max()) / (1 - lam)
+def stamp():
+    return time.time()
+"""
+DP_CHECK = """
+import lpbounds as lb
+def check(v, out):
+    if KIND == "patrol":
+        from lpbounds.patrol import PatrolModel, PatrolParams
+        mdp = PatrolModel(PatrolParams()).mdp()
+    else:
+        mdp = lb.garnet(2_048_000 if KIND == "garnet-paper" else 256_000, 3, 5, 0.9,
+                        seed=2048, shared_probabilities=True)
+        succ, probs, rew, allowed, lam = build_arrays()
+        assert np.array_equal(succ, mdp.successors) and np.array_equal(rew, mdp.rewards)
+        assert np.array_equal(probs, mdp.probabilities)
+    out["residual"] = lb.bellman_residual(mdp, np.asarray(v, dtype=float))
+    out["tol"] = 1e-10 * mdp.reward_absmax / (1 - mdp.discount)
+    print(json.dumps(out))
+"""
+DP_TASKS = {
+    "lpbounds": """
+import lpbounds as lb
+if KIND == "patrol":
+    from lpbounds.patrol import PatrolModel, PatrolParams
+    mdp = PatrolModel(PatrolParams()).mdp()
+else:
+    mdp = lb.garnet(2_048_000 if KIND == "garnet-paper" else 256_000, 3, 5, 0.9, seed=2048,
+                    shared_probabilities=True)
+t = time.perf_counter()
+r = lb.solve_exact(mdp, {method!r})
+ts = time.perf_counter() - t
+t_end = stamp()
+out = {{"seconds": ts, "end": t_end, "sweeps": r.sweeps, "iterations": r.iterations}}
+""",
+    "scipy": """
+# the plain scipy MPI loop: 5 evaluation sweeps per improvement, Porteus shift; the
+# stacked (A n) x n CSR gives every Q-value in one product; disallowed pairs get -1e4
+import scipy.sparse as sp
+succ, probs, rew, allowed, lam = build_arrays()
+n, A, L = succ.shape
+tol = target(rew, allowed, lam)
+t0 = time.perf_counter()
+rt = np.where(allowed, rew, -1e4).T.ravel()
+cols = np.where(allowed[:, :, None], succ, np.arange(n)[:, None, None]).transpose(1, 0, 2)
+pr = np.where(allowed[:, :, None], np.broadcast_to(probs, succ.shape), 1.0 / L)
+big = sp.csr_matrix((pr.transpose(1, 0, 2).ravel(), cols.ravel(), np.arange(0, A * n * L + 1, L)),
+                    shape=(A * n, n))
+tin = time.perf_counter() - t0
+t = time.perf_counter()
+v = np.zeros(n)
+its = 0
+while True:
+    q = (rt + lam * (big @ v)).reshape(A, n)
+    pol = q.argmax(axis=0)
+    tv = q[pol, np.arange(n)]
+    d = tv - v
+    if max(-d.min(), d.max()) <= tol:
+        break
+    its += 1
+    v = tv + lam / (1 - lam) * 0.5 * (d.min() + d.max())
+    p_pi = big[pol * n + np.arange(n)]
+    r_pi = rt[pol * n + np.arange(n)]
+    for _ in range(5):
+        nv = r_pi + lam * (p_pi @ v)
+        d = nv - v
+        v = nv + lam / (1 - lam) * 0.5 * (d.min() + d.max())
+ts = time.perf_counter() - t
+t_end = stamp()
+out = {"seconds": ts, "end": t_end, "input": tin, "iterations": its}
+""",
+    "quantecon": """
+# QuantEcon's DiscreteDP in state-action form (allowed pairs only), MPI with k = 5; its
+# stopping rule (span(Tv - v) < eps (1 - beta) / beta, then the midrange shift) leaves a
+# residual <= eps (1 - beta) / 2, so eps = 2 target / (1 - beta)
+import scipy.sparse as sp
+from quantecon.markov import DiscreteDP
+succ, probs, rew, allowed, lam = build_arrays()
+n, A, L = succ.shape
+tol = target(rew, allowed, lam)
+t0 = time.perf_counter()
+x_idx, a_idx = np.nonzero(allowed)
+q = sp.csr_matrix((np.broadcast_to(probs, (x_idx.size, L)).ravel(), succ[x_idx, a_idx].ravel(),
+                   np.arange(0, x_idx.size * L + 1, L)), shape=(x_idx.size, n))
+q.sum_duplicates()
+ddp = DiscreteDP(rew[x_idx, a_idx], q, lam, x_idx, a_idx)
+tin = time.perf_counter() - t0
+t = time.perf_counter()
+res = ddp.solve("modified_policy_iteration", v_init=np.zeros(n), epsilon=2 * tol / (1 - lam), k=5)
+ts = time.perf_counter() - t
+t_end = stamp()
+v = res.v
+out = {"seconds": ts, "end": t_end, "input": tin, "iterations": int(res.num_iter)}
+""",
+    "mdpsolver": """
+# mdpsolver (C++/OpenMP): nested lists (sparse form); no masks: disallowed pairs get -1e4
+import mdpsolver
+succ, probs, rew, allowed, lam = build_arrays()
+tol = target(rew, allowed, lam)
+t0 = time.perf_counter()
+m = mdpsolver.model()
+m.mdp(discount=lam, rewards=np.where(allowed, rew, -1e4).tolist(),
+      tranMatProbs=np.broadcast_to(probs, succ.shape).tolist(), tranMatColumns=succ.tolist())
+tin = time.perf_counter() - t0
+t = time.perf_counter()
+m.solve(algorithm="mpi", tolerance=tol, parallel=True, verbose=False)
+v = np.array(m.getValueVector())
+ts = time.perf_counter() - t
+t_end = stamp()
+out = {"seconds": ts, "end": t_end, "input": tin}
+""",
+}
+
+# the ported peer test models (tests/interop), in process: lpbounds' MPI and IPI, the
+# error of each against policy iteration's V* (exact evaluation by LU) and its certificate
+DP_PORTED = """
+import json, time, numpy as np, scipy.sparse as sp
+import lpbounds as lb
+def forest(S, r1=4.0, r2=2.0, p=0.1):  # pymdptoolbox's example (tests/interop)
+    P = np.zeros((2, S, S))
+    P[0, np.arange(S - 1), np.arange(1, S)] = 1 - p
+    P[0, S - 1, S - 1] = 1 - p
+    P[0, :, 0] += p
+    P[1, :, 0] = 1.0
+    R = np.zeros((S, 2)); R[S - 1, 0] = r1; R[1:, 1] = 1.0; R[S - 1, 1] = r2
+    return [sp.csr_matrix(P[0]), sp.csr_matrix(P[1])], R
+TEST1 = ([[5, -1], [1, -2], [50, 0]], [[[0.9, 0.1, 0.0], [0.1, 0.9, 0.0]],
+         [[0.4, 0.5, 0.1], [0.3, 0.5, 0.2]], [[0.2, 0.2, 0.6], [0.5, 0.5, 0.0]]])
+models = {}
+for S, lam in ((3, 0.9), (10, 0.96), (1000, 0.99)):
+    P, R = forest(S)
+    models[f"forest S={S}, discount {lam}"] = lb.FiniteMDP.from_matrices(P, R, lam)
+models["mdpsolver test1, discount 0.98"] = lb.FiniteMDP.from_quantecon(*TEST1, 0.98)
+out = []
+lb.solve_exact(models["forest S=3, discount 0.9"], "ipi")
+for name, mdp in models.items():
+    ref = lb.solve_exact(mdp, "pi", tol=1e-13 * max(1.0, mdp.reward_absmax) / (1 - mdp.discount))
+    row = {"model": name}
+    for m in ("mpi", "ipi"):
+        ts = []
+        for _ in range(5):
+            t = time.perf_counter(); r = lb.solve_exact(mdp, m); ts.append(time.perf_counter() - t)
+        err = float(np.abs(r.values - ref.values).max())
+        row[m] = {"ms": 1e3 * min(ts), "sweeps": r.sweeps, "err": err, "bound": r.error_bound,
+                  "ok": err <= r.error_bound + ref.error_bound}
+    out.append(row)
+print(json.dumps({"rows": out}))
+"""
+
+
+def dp_task(kind: str, tool: str, method: str = "mpi") -> dict:
+    """Run one exact-DP task in a fresh process; adds ``whole`` (launch to answer)."""
+    task = DP_TASKS[tool].format(method=method) if tool == "lpbounds" else DP_TASKS[tool]
+    code = DP_BUILD.format(kind=kind) + DP_CHECK + task
+    if tool == "lpbounds":
+        code += "v = r.values\n"
+    code += "check(v, out)\n"
+    launch = time.time()
+    label = f"{kind}/{tool}" + (f"-{method}" if tool == "lpbounds" else "")
+    out = run(code, label, timeout=900)
+    if "end" in out:
+        out["whole"] = out["end"] - launch
+    return out
+
+
+def main_dp(args: argparse.Namespace) -> None:
+    """The exact-DP comparison of issue 17 (``--dp``): writes the ``peers-dp`` section."""
+    load0 = os.getloadavg()
+    t_start = time.time()
+    R: dict[str, list[dict]] = {}
+    tools = ["lpbounds", "scipy", "quantecon", "mdpsolver"]
+    R["ported"] = [run(DP_PORTED, "ported")]
+    for rep in range(args.repeat):
+        for kind in args.models:
+            print(f"repetition {rep + 1}/{args.repeat}: {kind}  load {os.getloadavg()}", flush=True)
+            for tool in tools:
+                if tool == "mdpsolver" and (
+                    rep > 0 or (kind == "garnet-paper" and not args.mdpsolver_paper)
+                ):
+                    continue  # once (minutes per run); not on the paper-shape garnet by default
+                R.setdefault(f"{kind}/{tool}", []).append(dp_task(kind, tool))
+            if rep == 0:
+                R.setdefault(f"{kind}/lpbounds-ipi", []).append(dp_task(kind, "lpbounds", "ipi"))
+    load1 = os.getloadavg()
+    tmp = Path(os.environ.get("TMPDIR", "/tmp")) / "lpbounds-bench-peers"
+    tmp.mkdir(parents=True, exist_ok=True)
+    (tmp / "results-dp.json").write_text(json.dumps(R, indent=1))
+    write_section("peers-dp", dp_body(R, args, load0, load1, time.time() - t_start))
+
+
+def dp_body(R: dict, args: argparse.Namespace, load0, load1, wall: float) -> str:
+    names = {
+        "lpbounds": "lpbounds `solve_exact` (default: MPI)",
+        "lpbounds-ipi": "lpbounds `solve_exact(method='ipi')`",
+        "scipy": "plain scipy MPI loop (30 lines)",
+        "quantecon": "QuantEcon DiscreteDP MPI (k = 5)",
+        "mdpsolver": "mdpsolver MPI",
+    }
+    lines, targets_ = [], []
+    for kind in args.models:
+        lines.append(f"| **{DP_MODELS[kind]}** | | | | | |")
+        ours = R.get(f"{kind}/lpbounds", [])
+        a, aw = med(ours), med(ours, "whole")
+        best_in, best_whole = None, None
+        for tool in ("lpbounds", "lpbounds-ipi", "scipy", "quantecon", "mdpsolver"):
+            runs = R.get(f"{kind}/{tool}", [])
+            if not runs:
+                continue
+            b, bw = med(runs), med(runs, "whole")
+            err = next((r["error"] for r in runs if "error" in r), "")
+            chk = [r for r in runs if "residual" in r]
+            ok = all(r["residual"] <= r["tol"] for r in chk) if chk else False
+            cert = (
+                f"{max(r['residual'] for r in chk):.1e} "
+                f"({'meets' if ok else '**MISSES**'} {chk[0]['tol']:.1e})"
+                if chk
+                else "failed: " + err.splitlines()[-1][:100]
+                if err
+                else "-"
+            )
+            ratio = "-" if a is None or b is None else f"{a / b:.2f}"
+            ratio_w = "-" if aw is None or bw is None else f"{aw / bw:.2f}"
+            spread = ", ".join(f"{r['seconds']:.2f}" for r in runs if "seconds" in r)
+            cells = [names[tool], f"{fmt(b)} ({spread})", fmt(bw), ratio, ratio_w, cert]
+            lines.append("| " + " | ".join(cells) + " |")
+            if tool in ("scipy", "quantecon", "mdpsolver") and b is not None and ok:
+                best_in = b if best_in is None else min(best_in, b)
+                best_whole = bw if best_whole is None else min(best_whole, bw or np.inf)
+        if a and best_in:
+            targets_.append(
+                f"| {kind} | {best_in / a:.2f}x (target 2x: "
+                f"{'met' if best_in / a >= 2 else '**missed**'}) | "
+                + (
+                    f"{best_whole / aw:.2f}x (target 1.5x: "
+                    f"{'met' if best_whole / aw >= 1.5 else '**missed**'}) |"
+                    if aw and best_whole
+                    else "- |"
+                )
+            )
+    ported = []
+    for row in (R.get("ported") or [{}])[0].get("rows", []):
+        cells = [row["model"]]
+        for m in ("mpi", "ipi"):
+            x = row[m]
+            ok = "yes" if x["ok"] else "**NO**"
+            cells.append(
+                f"{x['ms']:.2f} ms, {x['sweeps']} sweeps, error {x['err']:.1e} <= "
+                f"{x['bound']:.1e}: {ok}"
+            )
+        ported.append("| " + " | ".join(cells) + " |")
+    return (
+        f"""## Peers: exact DP against scipy, QuantEcon and mdpsolver (issue 17)
+
+Machine: {machine()}. Date: {today()}. Versions: {versions()}, quantecon
+{_version("quantecon")}. Load average (1, 5, 15 min) at start {load0[0]:.2f} {load0[1]:.2f}
+{load0[2]:.2f}, at end {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f} (2 cores: above 2 the
+machine was shared with other jobs and every time is inflated, unevenly). Repetitions:
+{args.repeat} (median, all runs in brackets; each task a fresh process; the tools alternate
+within a repetition; lpbounds' IPI and mdpsolver once, mdpsolver with a 900 s limit); the
+run took {wall / 60:.1f} min.
+
+"solve s" is the solve alone, the model in memory in the tool's own format; "whole s" is
+the whole process, from its launch to the answer: interpreter start-up, imports, model
+build (garnets: the same numpy draws as `lpbounds.garnet`, so a peer does not import
+lpbounds; the patrol: lpbounds' builder for every tool), conversion and solve. Ratios are
+lpbounds' default solve / the row's (below 1: lpbounds faster). Every answer's Bellman
+residual is measured by lpbounds on the returned vector after the clock stops, against
+the target 1e-10 max|R| / (1 - discount). mdpsolver is not run on the paper-shape garnet
+(its nested-list input of 6 M pairs takes ~4 GB; `--mdpsolver-paper` runs it).
+
+| tool | solve s (runs) | whole s | ratio solve | ratio whole | residual (target) |
+|---|---|---|---|---|---|
+"""
+        + "\n".join(lines)
+        + """
+
+Speed-up of lpbounds' default solve over the fastest peer whose answer met the target
+(issue 17's targets: >= 2x in process on the patrol and the paper-shape garnet, >= 1.5x
+as a whole process):
+
+| model | in process | whole process |
+|---|---|---|
+"""
+        + "\n".join(targets_)
+        + """
+
+lpbounds' MPI and IPI on the ported peer test models (tests/interop; in process, best of
+5; error against policy iteration's V* to 1e-13, within each answer's certificate):
+
+| model | MPI | IPI |
+|---|---|---|
+"""
+        + "\n".join(ported)
+        + "\n"
+    )
+
+
+def _version(pkg: str) -> str:
+    import importlib.metadata as md
+
+    try:
+        return md.version(pkg)
+    except md.PackageNotFoundError:
+        return "(not installed)"
+
+
 def run(code: str, label: str, timeout: float = 1800) -> dict:
     try:
         out = run_isolated(code, timeout=timeout)
@@ -365,7 +709,13 @@ def main() -> None:
         choices=["numpy", "pymdptoolbox"],
         help="rerun only these peers' exact solves and merge them into the last run's results",
     )
+    ap.add_argument("--dp", action="store_true", help="the exact-DP comparison (issue 17)")
+    ap.add_argument("--models", nargs="*", choices=list(DP_MODELS), default=list(DP_MODELS))
+    ap.add_argument("--mdpsolver-paper", action="store_true", help="mdpsolver on garnet-paper")
     args = ap.parse_args()
+    if args.dp:
+        main_dp(args)
+        return
     params = "{}" if not args.quick else "{'N': 10, 'stations': (0, 3, 6), 'Gamma': 8}"
     reps = 1 if args.quick else args.repeat
     tmp = Path(os.environ.get("TMPDIR", "/tmp")) / "lpbounds-bench-peers"
