@@ -89,7 +89,7 @@ def report(r: dict, load_before: tuple, load_after: tuple, model: str) -> str:
             f"| MDP build (`load_instance(...).mdp()`) | {r['mdp_s']:.1f} |",
             f"| ELP rows and (A, b, c) | {r['elp_s']:.1f} |",
             f"| exact DP for the policy and its basis (`policy_basis`) | {r['dp_s']:.1f} |",
-            f"| HighsLp built, passed, basis set | {r['pass_s']:.1f} |",
+            f"| LP passed to HiGHS (array interface), basis set | {r['pass_s']:.1f} |",
             f"| HiGHS simplex from the basis ({r['iterations']} iterations) | {r['highs_s']:.1f} |",
             f"| certificate, residuals, duals mapped to (state, action) | {r['judge_s']:.1f} |",
             "",
