@@ -11,6 +11,8 @@ the same optimum with the occupation measures as duals.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -43,7 +45,9 @@ def rows_reference(rows: lb.BellmanRows, tol: float = 1e-13) -> np.ndarray:
         v = nv
 
 
+@functools.cache
 def _forms() -> dict[str, RowsLP]:
+    """The LPs of the tests, built once on first use (not at collection)."""
     mdp = lb.garnet(40, 3, 3, 0.9, seed=7, allowed_fraction=0.7)  # masked: some pairs forbidden
     part = lb.random_partition(40, 8, seed=2)
     small = lb.load_instance("patrol-small")
@@ -61,7 +65,10 @@ def _forms() -> dict[str, RowsLP]:
     }
 
 
-FORMS = _forms()
+NAMES = [
+    "ELP garnet", "RLP garnet", "SLP garnet", "IB garnet", "ELP patrol-small",
+    "RLP patrol-small", "UBLP patrol-small", "LBLP patrol-small",
+]  # fmt: skip
 
 
 def _within_certificate(res: lb.formulations.LPResult, ref: np.ndarray) -> None:
@@ -73,9 +80,9 @@ def _within_certificate(res: lb.formulations.LPResult, ref: np.ndarray) -> None:
     assert np.abs(res.values - ref).max() <= res.error_bound + slack
 
 
-@pytest.mark.parametrize("name", list(FORMS))
+@pytest.mark.parametrize("name", NAMES)
 def test_highspy_equals_cvxpy_and_the_fixed_point_within_the_certificate(name):
-    form = FORMS[name]
+    form = _forms()[name]
     ref = rows_reference(form.rows)
     via_cvxpy = form.solve("HIGHS")
     direct = form.solve("HIGHS", backend="highspy")
@@ -98,7 +105,7 @@ def test_cvxpy_hands_highs_the_rows_as_highspy_does(name):
     # different number of iterations (15 instead of 16 on patrol-small's RLP, 14 instead of
     # 16 on its UBLP, 42 instead of 30 on the paper's UBLP); lpbounds' adapter hands over
     # A x >= b, exactly what highspy gets
-    form = FORMS[name]
+    form = _forms()[name]
     opts = {"highs_options": {"solver": "ipm", "run_crossover": "off"}}
     via_cvxpy = form.solve("HIGHS", **opts)
     direct = form.solve("HIGHS", backend="highspy", **opts)
@@ -136,7 +143,7 @@ def test_time_limit_keeps_the_point_and_a_valid_bracket(backend):
     "name", ["ELP garnet", "RLP garnet", "ELP patrol-small", "LBLP patrol-small"]
 )
 def test_policy_warm_start_same_optimum_in_no_iterations(name):
-    form = FORMS[name]
+    form = _forms()[name]
     ref = rows_reference(form.rows)
     res = form.solve("HIGHS", backend="highspy", warm_start="policy")
     assert res.status is lb.Status.OPTIMAL and res.extra["warm_start"] == "policy"
@@ -169,16 +176,25 @@ def test_policy_warm_start_duals_are_the_occupation_measure():
     ],
 )
 def test_bad_backend_arguments_are_named(kwargs, match):
-    form = FORMS["ELP garnet"]
+    form = _forms()["ELP garnet"]
     with pytest.raises(ValidationError, match=match):
         form.solve(**kwargs)
 
 
 def test_highspy_refuses_extra_constraints_and_non_row_warm_starts():
-    form = FORMS["RLP garnet"]
+    form = _forms()["RLP garnet"]
     with pytest.raises(ValidationError, match="extra_constraints need backend='cvxpy'"):
         form.solve(backend="highspy", extra_constraints=[form.v[0] <= form.v[1] + 100])
     mdp = lb.garnet(20, 2, 2, 0.9, seed=1)
     alp = ALP(mdp, soft_aggregation_basis(20, 3))
     with pytest.raises(ValidationError, match="no policy basis"):
         alp.solve(backend="highspy", warm_start="policy")
+
+
+def test_cvxpy_path_reports_an_infeasible_modification_as_infeasible():
+    # every feasible v dominates the fixed point (Fact 1), so v[0] <= min - 1 is infeasible
+    form = _forms()["RLP garnet"]
+    low = float(rows_reference(form.rows).min()) - 1.0
+    res = form.solve("HIGHS", extra_constraints=[form.v[0] <= low], raise_on_failure=False)
+    assert res.status is lb.Status.INFEASIBLE and np.isnan(res.x).all()
+    assert res.extra["message"] == "kInfeasible"
