@@ -198,6 +198,23 @@ def test_monte_carlo_is_reproducible_and_seeded(solved):
     assert a.truncation == truncation_bound(pm.params, 30)
 
 
+def test_parallel_paths_do_not_share_work_arrays(solved):
+    """The same returns on 1 and on 2 threads (a race on shared buffers would differ)."""
+    numba = pytest.importorskip("numba")
+    pm, _, _, b, _ = solved["busy"]
+    kw = dict(starts=np.array([0, 7, 100]), paths=200, horizon=60, seed=4)
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = greedy_value_mc(pm.params, b.lower, b.upper, **kw)
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        two = greedy_value_mc(pm.params, b.lower, b.upper, **kw)
+    finally:
+        numba.set_num_threads(before)
+    np.testing.assert_array_equal(one.mean, two.mean)
+    np.testing.assert_array_equal(one.std, two.std)
+
+
 def test_control_variate_keeps_the_mean_and_cuts_the_spread(solved):
     """Same paths (same seed) with and without the control variate: the estimates agree
     within their intervals and the corrected returns spread far less."""

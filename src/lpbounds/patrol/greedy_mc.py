@@ -312,27 +312,33 @@ def _actions_kernel(xs, lower, mt, out):  # pragma: no cover - compiled
         out[i] = _greedy_step(lower, mt, buf)[0]
 
 
+@njit(cache=True, nogil=True)
+def _path_return(x0, outcomes, lower, mt, cv):  # pragma: no cover - compiled
+    """The discounted return of one path from ``x0`` under ``outcomes`` (its own work
+    arrays: a separate function, so the parallel loop cannot hoist and share them)."""
+    discount = mt[8]
+    buf = _buffers(mt[3].shape[0])
+    wn, ev = buf[8], buf[9]
+    _set_state(x0, mt, buf)
+    g = 0.0
+    disc = 1.0
+    for t in range(outcomes.shape[0]):
+        a, r = _greedy_step(lower, mt, buf)
+        y = outcomes[t]
+        g += disc * r
+        if cv:
+            g -= disc * discount * (wn[a, y] - ev[a])
+        disc *= discount
+        _advance(a, y, buf)
+    return g
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def _returns_kernel(x0, outcomes, lower, mt, cv, out):  # pragma: no cover - compiled
     """``out[p]``: the discounted return of path ``p`` from ``x0`` under ``outcomes[p]``,
     minus (``cv``) the control variate ``sum_t lambda^(t+1) (w(x_(t+1)) - E_t w(x_(t+1)))``."""
-    n_paths, horizon = outcomes.shape
-    discount = mt[8]
-    for p in prange(n_paths):
-        buf = _buffers(mt[3].shape[0])
-        wn, ev = buf[8], buf[9]
-        _set_state(x0, mt, buf)
-        g = 0.0
-        disc = 1.0
-        for t in range(horizon):
-            a, r = _greedy_step(lower, mt, buf)
-            y = outcomes[p, t]
-            g += disc * r
-            if cv:
-                g -= disc * discount * (wn[a, y] - ev[a])
-            disc *= discount
-            _advance(a, y, buf)
-        out[p] = g
+    for p in prange(outcomes.shape[0]):
+        out[p] = _path_return(x0, outcomes[p], lower, mt, cv)
 
 
 @njit(cache=True, nogil=True)
