@@ -212,6 +212,7 @@ def test_reproduce_beyond_writes_the_section(result, tmp_path, monkeypatch):
     )
     text = (tmp_path / "out" / "report.md").read_text()
     assert "## Beyond the paper" in text and "pi_s where no exact value exists" in text
+    assert "Inconsistent Monte Carlo" not in text  # every interval below v* + err
     data = json.loads((tmp_path / "out" / "beyond.json").read_text())
     assert [r["m"] for r in data["sizes"]] == [2, 3]
     assert data["sizes"][0]["source"].startswith("array path")
@@ -252,3 +253,33 @@ def test_the_array_path_row_must_find_the_runs_policy():
     with pytest.raises(ConsistencyError, match="differs from the run's on 1 states"):
         study_from_arrays(params, "tiny", pi_s=wrong, **kw)
     assert isinstance(ev, PolicyEvaluation)
+
+
+def test_a_monte_carlo_interval_above_the_upper_bound_is_reported():
+    """V_pis <= V* <= v*: an interval wholly above v* + err proves the estimate wrong."""
+    t1 = {
+        "mean_loiters": 4.7,
+        "mean_delay": 4.7,
+        "mean_delay_plus_one": 5.7,
+        "worst_delay": 14,
+        "worst_delay_plus_one": 15,
+    }
+    entry = {
+        "m": 6,
+        "n_states": 10,
+        "starts": 3,
+        "paths": 100,
+        "horizon": 5,
+        "max_half_width": 1e-3,
+        "gap_bound_max": -0.1,
+        "gap_bound_mean": -0.2,
+        "above_upper": 2,
+        "table1": t1,
+        "level": 0.95,
+        "table1_seeds": [1],
+        "table1_steps": 10,
+    }
+    text = "\n".join(beyond._mc_lines([entry]))
+    assert "**Inconsistent Monte Carlo at m = 6:** 2 of 3 intervals" in text
+    entry["above_upper"] = 0
+    assert "Inconsistent" not in "\n".join(beyond._mc_lines([entry]))

@@ -711,6 +711,9 @@ def monte_carlo(models: tuple[str, ...] = MC_MODELS, tr: Any = None) -> list[dic
                 "mean_half_width": float(np.mean(est.half_width)),
                 "max_half_width": float(np.max(est.half_width)),
                 "gap_bound_max": float(np.max(est.gap_bound)),
+                # an interval wholly above v* + err contradicts V_pis <= V* <= v*: the
+                # estimate (not the bound) is wrong there
+                "above_upper": int(np.sum(est.ci_low > est.upper + est.upper_error)),
                 "gap_bound_mean": float(np.mean(est.gap_bound)),
                 "upper_minus_lower_mean": float(np.mean(est.upper - est.lower)),
                 "per_start": est.rows(),
@@ -891,6 +894,7 @@ def _mc_lines(mc: list[dict[str, Any]]) -> list[str]:
                 e["max_half_width"],
                 e["gap_bound_max"],
                 e["gap_bound_mean"],
+                e.get("above_upper", 0),
                 t["mean_loiters"],
                 f"{t['mean_delay']:.2f} ({t['mean_delay_plus_one']:.2f})",
                 f"{t['worst_delay']} ({t['worst_delay_plus_one']})",
@@ -914,6 +918,7 @@ def _mc_lines(mc: list[dict[str, Any]]) -> list[str]:
                 "max CI half-width",
                 "max certificate V* - V_pis",
                 "mean certificate",
+                "intervals above v*",
                 "mean loiters",
                 "mean delay",
                 "worst delay",
@@ -921,6 +926,13 @@ def _mc_lines(mc: list[dict[str, Any]]) -> list[str]:
             rows,
         )
         + "\n",
+        *[
+            f"**Inconsistent Monte Carlo at m = {e['m']}:** {e['above_upper']} of "
+            f"{e['starts']} intervals lie wholly above the certified v* + err, which "
+            "V_pis <= V* <= v* rules out: those estimates are wrong, not the bound.\n"
+            for e in mc
+            if e.get("above_upper", 0)
+        ],
     ]
 
 
