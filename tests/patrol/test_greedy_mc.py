@@ -198,6 +198,29 @@ def test_monte_carlo_is_reproducible_and_seeded(solved):
     assert a.truncation == truncation_bound(pm.params, 30)
 
 
+@pytest.mark.parametrize("cv", [False, True])
+def test_path_returns_equal_a_walk_on_the_mdp(solved, cv):
+    """Each path's (corrected) return equals the sum along the same alert sequence walked
+    on the MDP's arrays under greedy_policy's pi_s (no code of greedy_mc involved)."""
+    from lpbounds.patrol.greedy_mc import _Kernel, _returns_kernel
+
+    pm, mdp, labels, b, pi_s = solved["busy"]
+    lam, probs, w = mdp.discount, mdp.probabilities, b.lower[labels]
+    y = alert_sequence(5 * 40, probs[0], pm.params.m, 2).reshape(5, 40)
+    got = np.empty(5)
+    _returns_kernel(17, y, b.lower, _Kernel.of(pm.params).args(), cv, got)
+    for p in range(5):
+        x, g = 17, 0.0
+        for t in range(40):
+            a = pi_s[x]
+            nxt = mdp.successors[x, a]
+            g += lam**t * mdp.rewards[x, a]
+            if cv:
+                g -= lam ** (t + 1) * (w[nxt[y[p, t]]] - probs @ w[nxt])
+            x = nxt[y[p, t]]
+        assert got[p] == pytest.approx(g, rel=1e-12, abs=1e-15), p
+
+
 def test_parallel_paths_do_not_share_work_arrays(solved):
     """The same returns on 1 and on 2 threads (a race on shared buffers would differ)."""
     numba = pytest.importorskip("numba")
