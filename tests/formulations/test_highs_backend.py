@@ -197,4 +197,4 @@ def test_cvxpy_path_reports_an_infeasible_modification_as_infeasible():
     low = float(rows_reference(form.rows).min()) - 1.0
     res = form.solve("HIGHS", extra_constraints=[form.v[0] <= low], raise_on_failure=False)
     assert res.status is lb.Status.INFEASIBLE and np.isnan(res.x).all()
-    assert res.extra["message"] == "kInfeasible"
+    assert res.extra["message"] == "infeasible" and res.extra["highs_status"] == "kInfeasible"

@@ -470,7 +470,7 @@ class CvxpyBackend(Backend):
             solver=solver,
             options=options,
             status=status,
-            message=str(problem.status) if adapter is None else adapter.model_status,
+            message=str(problem.status),
             x=x,
             y=None if y is None else np.maximum(y, 0.0),
             compile_seconds=compile_s,
@@ -1090,7 +1090,7 @@ class Formulation:
             dual_residual=float("nan"),
             gap=float("nan"),
             accuracy=accuracy,
-            extra={"message": run.message},
+            extra={"message": run.message, **run.extra},
         )
 
     def __repr__(self) -> str:
