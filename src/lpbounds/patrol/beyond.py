@@ -741,9 +741,12 @@ def plot_gap_shares(rows: list[SizeResult], path: str | Path) -> Path:
     """The figure of the beyond section: the mean gaps ``v* - V*``, ``V* - w*`` and
     ``v* - w*`` over states (left, log-log) and each side's share of the gap (right),
     against the number of states."""
+    from matplotlib.ticker import NullLocator
+
     from .figures import _save, plt
 
     n = [r.n_states for r in rows]
+    ticks = [f"{r.n_states:.2g}\nm = {r.m}" for r in rows]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     for key, label, mk in (
         ("upper_mean", "mean v* - V* (UBLP side)", "v"),
@@ -751,27 +754,21 @@ def plot_gap_shares(rows: list[SizeResult], path: str | Path) -> Path:
         ("gap_mean", "mean v* - w*", "o"),
     ):
         ax1.loglog(n, [r.gaps[key] for r in rows], marker=mk, label=label)
-    ax1.set_xlabel("|S| (states)")
     ax1.set_ylabel("mean over states")
-    ax1.legend(fontsize=8)
     for key, label, mk in (
         ("upper_share", "share of v* - V*", "v"),
         ("lower_share", "share of V* - w*", "^"),
     ):
         ax2.semilogx(n, [r.gaps[key] for r in rows], marker=mk, label=label)
-    for r in rows:
-        ax2.annotate(
-            f"m = {r.m}",
-            (r.n_states, r.gaps["upper_share"]),
-            fontsize=8,
-            textcoords="offset points",
-            xytext=(4, 4),
-        )
     ax2.set_ylim(0.0, 1.0)
-    ax2.set_xlabel("|S| (states)")
     ax2.set_ylabel("fraction of mean(v* - w*)")
-    ax2.legend(fontsize=8)
-    fig.suptitle("Who owns the gap between the bounds: 4, 5, 6 stations")
+    for ax in (ax1, ax2):
+        ax.set_xticks(n, ticks)
+        ax.xaxis.set_minor_locator(NullLocator())
+        ax.set_xlabel("|S| (states)")
+        ax.legend(fontsize=8)
+    sizes = ", ".join(str(r.m) for r in rows)
+    fig.suptitle(f"Who owns the gap between the bounds: {sizes} stations")
     fig.tight_layout()
     return _save(fig, path)
 
