@@ -550,7 +550,7 @@ class _ThreadChoice:
     """
 
     SAMPLES: int = 2
-    RECHECK: int = 16
+    RECHECK: int = 32
     MARGIN: float = 0.9
     #: All threads are kept only when their mean sweep is this much faster than one
     #: thread's: on a loaded machine their times scatter (a descheduled thread stalls the
