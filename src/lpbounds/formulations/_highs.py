@@ -178,10 +178,8 @@ def set_options(h: Any, options: dict[str, Any], verbose: bool) -> None:
     ValidationError
         Naming the option HiGHS rejects (unknown name or a value of the wrong type or range).
     """
-    opts = dict(options)
-    opts.update(opts.pop("highs_options", None) or {})
     h.setOptionValue("output_flag", bool(verbose))
-    for key, value in opts.items():
+    for key, value in _unpacked(options).items():
         ok = _option_ok(h, key, value)
         if not ok:
             raise ValidationError(
@@ -189,6 +187,13 @@ def set_options(h: Any, options: dict[str, Any], verbose: bool) -> None:
                 "the wrong type or range; HiGHS' options: https://ergo-code.github.io/HiGHS/"
                 "dev/options/definitions/)"
             )
+
+
+def _unpacked(options: dict[str, Any]) -> dict[str, Any]:
+    """``options`` with the entries of ``highs_options`` moved to the top level (as cvxpy)."""
+    opts = dict(options)
+    opts.update(opts.pop("highs_options", None) or {})
+    return opts
 
 
 def _option_ok(h: Any, key: str, value: Any) -> bool:
@@ -305,9 +310,7 @@ class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
         if data.get(s.UPPER_BOUNDS) is not None:
             lp.col_upper = np.asarray(data[s.UPPER_BOUNDS], dtype=np.float64)
         h = quiet_highs()
-        opts = dict(solver_opts)
-        opts.update(opts.pop("highs_options", None) or {})
-        for key, value in opts.items():
+        for key, value in _unpacked(solver_opts).items():
             if not _option_ok(h, key, value):
                 raise ValueError(f"HIGHS rejected the option {key}={value!r}")
         h.setOptionValue("output_flag", bool(verbose))
