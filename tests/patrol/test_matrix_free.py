@@ -80,7 +80,11 @@ def test_policy_evaluation_bit_for_bit(case):
     labels = pm.partition().labels
     pi_s = greedy_policy(mdp, partition_bounds(params).lower[labels])
     ref = evaluate_policy(mdp, pi_s, method="iterative")
-    got = mf_evaluate(mf, pi_s)
+    seen: list[tuple[int, float]] = []
+    got = mf_evaluate(mf, pi_s, callback=lambda k, r: seen.append((k, r)))
+    assert [k for k, _ in seen] == list(range(1, got.sweeps + 1))
+    tol = mf.default_tol()  # the loop stops at the first sweep whose residual is <= tol
+    assert seen[-1][1] <= tol and all(r > tol for _, r in seen[:-1])
     assert np.array_equal(got.values, ref.values)
     assert (got.residual, got.error_bound, got.sweeps) == (
         ref.residual,

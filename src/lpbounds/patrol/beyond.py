@@ -462,7 +462,12 @@ def study(
     )
 
     def evaluate(pi_s: np.ndarray) -> Any:
-        return evaluate_policy(mf, pi_s)
+        def every_tenth(k: int, r: float) -> None:
+            if k % 10 == 0:
+                say(f"V_sub sweep {k}: residual {r:.3e} ({time.perf_counter() - t1:.0f} s)")
+
+        t1 = time.perf_counter()
+        return evaluate_policy(mf, pi_s, callback=every_tenth)
 
     g, s, ev, checks = _measure(mf, vstar, err_v, pistar, bounds, evaluate, tr, seconds, tag, say)
     return SizeResult(

@@ -907,12 +907,14 @@ def evaluate_policy(
     *,
     tol: float | None = None,
     max_sweeps: int = 1_000_000,
+    callback: Callback | None = None,
 ) -> PolicyEvaluation:
     """``V_pi`` by extrapolated evaluation sweeps: :func:`lpbounds.evaluate_policy`'s
     iterative method (same numbers, bit for bit), in two value vectors.
 
     The residual is measured by one more sweep on the returned vector; the error bound is
-    :func:`lpbounds.tolerances.error_bound` of it.
+    :func:`lpbounds.tolerances.error_bound` of it. ``callback(sweep, residual)``, if given,
+    is called after every sweep (progress of a long evaluation).
 
     Raises
     ------
@@ -925,7 +927,7 @@ def evaluate_policy(
     act = mf.check_policy(policy)
     tol_ = mf.default_tol() if tol is None else float(tol)
     with _threads_for(cast(Any, mf)):  # duck-typed: compiled, n_rows, n_outcomes
-        u, res, sweeps = _evaluate(mf, act, tol_, max_sweeps)
+        u, res, sweeps = _evaluate(mf, act, tol_, max_sweeps, callback)
     vmax = _check_finite("matrix-free policy evaluation", u, res)
     if res > tol_:
         raise ConvergenceError(f"policy evaluation stopped with residual {res:.3e} > {tol_:.3e}")
@@ -940,7 +942,11 @@ def evaluate_policy(
 
 
 def _evaluate(
-    mf: MatrixFreePatrol, act: np.ndarray, tol: float, max_sweeps: int
+    mf: MatrixFreePatrol,
+    act: np.ndarray,
+    tol: float,
+    max_sweeps: int,
+    callback: Callback | None = None,
 ) -> tuple[np.ndarray, float, int]:
     """:func:`lpbounds.dp._evaluate_iterative`'s loop in two vectors, and the residual
     measured by one more sweep on the returned vector."""
@@ -952,6 +958,8 @@ def _evaluate(
         lo, hi = mf.sweep_policy(act, u, buf)
         sweeps += 1
         lo, hi, c_next = _offset_step(lam, c, lo, hi, True)
+        if callback is not None:
+            callback(sweeps, max(-lo, hi))
         if max(-lo, hi) <= tol or sweeps >= max_sweeps:
             break
         c = c_next
