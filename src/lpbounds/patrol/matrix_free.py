@@ -41,14 +41,15 @@ the status is :attr:`Status.OPTIMAL` when the residual reached the tolerance.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, cast
 
 import numpy as np
 from numba import njit, prange
 
-from ..dp import PolicyEvaluation, _offset_step, _threads_for
+from ..dp import PolicyEvaluation, _offset_step, _ThreadChoice, _threads_for
 from ..errors import ConvergenceError, ValidationError
 from ..status import Status
 from ..tolerances import DP_RTOL, dp_scale, error_bound
@@ -648,6 +649,7 @@ class MatrixFreePatrol:
         self._inc = np.append(p.information_increments(), 0.0)
         self._rho = float(p.rho)
         self._reward_absmax: float | None = None
+        self._choice: Any = None  # a dp._ThreadChoice while a solve runs (_adaptive_threads)
         row = int(self._geo[_ROW])
         self._block = max(1, BLOCK // row) * row  # whole rows
 
@@ -717,13 +719,25 @@ class MatrixFreePatrol:
     def sweep_max(self, v: np.ndarray, out: np.ndarray, arg: np.ndarray) -> tuple[float, float]:
         """``out = T v``, the first maximising action in ``arg`` (int8); returns the min and
         max of ``out - v``."""
-        lo, hi = _sweep_max_kernel(*self._common(), v, out, arg, self.nchunks(), self._block)
+        args = (*self._common(), v, out, arg, self.nchunks(), self._block)
+        lo, hi = self._timed("max", _sweep_max_kernel, args)
         return float(lo), float(hi)
 
     def sweep_policy(self, act: np.ndarray, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:
         """``out = T_pi v`` for the actions ``act`` (int8); returns min and max of ``out - v``."""
-        lo, hi = _sweep_policy_kernel(*self._common(), act, v, out, self.nchunks(), self._block)
+        args = (*self._common(), act, v, out, self.nchunks(), self._block)
+        lo, hi = self._timed("policy", _sweep_policy_kernel, args)
         return float(lo), float(hi)
+
+    def _timed(self, kind: str, kernel: Any, args: tuple[Any, ...]) -> Any:
+        """Run a sweep kernel on the thread count :func:`_adaptive_threads` chose."""
+        if self._choice is None:
+            return kernel(*args)
+        k = self._choice.start(kind)
+        t = time.perf_counter()
+        out = kernel(*args)
+        self._choice.stop(kind, k, time.perf_counter() - t)
+        return out
 
     def labels(self) -> np.ndarray:
         """The partition of every state, int32 (computed, as the model's :meth:`partition`)."""
@@ -755,6 +769,21 @@ class MatrixFreePatrol:
 
 # ---------------------------------------------------------------------- solvers
 Callback = Callable[[int, float], None]
+
+
+@contextmanager
+def _adaptive_threads(mf: MatrixFreePatrol) -> Iterator[None]:
+    """The sweeps of one solve on one thread or all, as the array path's loop chooses
+    (:class:`lpbounds.dp._ThreadChoice`: timed, re-checked as the load changes; small
+    models on one thread, :func:`lpbounds.dp._threads_for`). No number changes."""
+    ops = cast(Any, mf)  # duck-typed: compiled, n_rows, n_outcomes
+    with _threads_for(ops):
+        mf._choice = _ThreadChoice(ops)
+        try:
+            yield
+        finally:
+            mf._choice.restore()
+            mf._choice = None
 
 
 @dataclass
@@ -844,7 +873,7 @@ def solve_vstar(
     tol_ = mf.default_tol() if tol is None else float(tol)
     if not tol_ > 0:
         raise ValidationError(f"tol must be a positive number; got {tol!r}")
-    with _threads_for(cast(Any, mf)):  # duck-typed: compiled, n_rows, n_outcomes
+    with _adaptive_threads(mf):
         u, arg, res, its, sweeps, ok, hist = _mpi(mf, tol_, max_iter, eval_sweeps, callback)
     vmax = _check_finite("matrix-free MPI", u, res)
     if not ok and raise_on_failure:
@@ -926,7 +955,7 @@ def evaluate_policy(
     t0 = time.perf_counter()
     act = mf.check_policy(policy)
     tol_ = mf.default_tol() if tol is None else float(tol)
-    with _threads_for(cast(Any, mf)):  # duck-typed: compiled, n_rows, n_outcomes
+    with _adaptive_threads(mf):
         u, res, sweeps = _evaluate(mf, act, tol_, max_sweeps, callback)
     vmax = _check_finite("matrix-free policy evaluation", u, res)
     if res > tol_:
