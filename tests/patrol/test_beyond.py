@@ -140,7 +140,24 @@ def test_a_checkpoint_is_resumed(result):
     again: list[str] = []
     res2 = study(PARAMS, "three-stations", log=again.append, checkpoint=ck)
     assert any("V* loaded" in ln for ln in again)
-    assert res2.gaps == res.gaps and res2.vstar == res.vstar
+    assert res2.gaps == res.gaps and res2.vstar["status"] == res.vstar["status"] == "optimal"
+    # the loaded vector is certified again, not trusted: its residual is within the tolerance
+    assert res2.vstar["residual"] <= res2.vstar["tol"]
+
+
+def test_a_tampered_checkpoint_is_not_trusted(result, tmp_path):
+    _, _, ck = result
+    import shutil
+
+    bad = tmp_path / "bad"
+    shutil.copytree(ck, bad)
+    v = np.load(bad / "vstar.npy")
+    v[7] += 1e-3  # an edit the saved summary does not know about
+    np.save(bad / "vstar.npy", v)
+    res = study(PARAMS, "three-stations", log=[].append, checkpoint=bad)
+    assert res.vstar["status"] == "inaccurate"
+    # at state 7, T v - v moves by at least (1 - lambda) 1e-3 (lambda = 0.9)
+    assert res.vstar["residual"] >= 0.99 * (1 - PARAMS.discount) * 1e-3
 
 
 def _fake(m: int, upper_mean: float, lower_mean: float, upper_max: float = 1.0) -> SizeResult:

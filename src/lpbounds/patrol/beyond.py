@@ -38,8 +38,8 @@ from typing import Any
 import numpy as np
 
 from ..checks import compare_at_least
-from ..status import Verdict
-from ..tolerances import GREEDY_TIE_RTOL
+from ..status import Status, Verdict
+from ..tolerances import GREEDY_TIE_RTOL, error_bound
 from . import matrix_free as mfm
 from .matrix_free import MatrixFreePatrol, evaluate_policy, solve_vstar
 from .params import PatrolParams
@@ -447,7 +447,8 @@ def study(
     if saved is not None:
         vstar, pistar, vs = saved
         seconds[f"{tag}_vstar"] = vs["seconds"]
-        say(f"V* loaded from {checkpoint}")
+        vs = _recertify(mf, vstar, vs)
+        say(f"V* loaded from {checkpoint} and certified again from the vector (one sweep)")
     else:
         with _stage(tr, seconds, f"{tag}_vstar", f"{params.m} stations: V* ({n:,} states)") as adv:
             sol = solve_vstar(mf, callback=lambda it, r: progress(it, r, adv))
@@ -503,6 +504,26 @@ def _save_vstar(
     np.save(folder / "pistar.npy", pistar)
     meta = {"params": params.to_table(), "vstar": summary}
     (folder / "vstar.json").write_text(json.dumps(meta, indent=2) + "\n")  # written last
+
+
+def _recertify(mf: MatrixFreePatrol, vstar: np.ndarray, vs: dict[str, Any]) -> dict[str, Any]:
+    """A ``V*`` read from disk is a claim until certified again: one Bellman sweep of the
+    vector gives its residual and error bound (``(residual + slack) / (1 - lambda)``), which
+    replace the saved ones; the status is OPTIMAL only if the residual is within the saved
+    tolerance, else INACCURATE (a file edited or truncated since it was written)."""
+    out = mf.new_vector()
+    arg = np.empty(mf.n_vars, dtype=np.int8)
+    lo, hi = mf.sweep_max(vstar, out, arg)
+    del out, arg
+    res = max(-lo, hi)
+    vmax = mfm._check_finite("the saved V*", vstar, res)
+    ok = res <= float(vs["tol"])
+    return {
+        **vs,
+        "residual": res,
+        "error_bound": error_bound(res, vmax, mf.discount),
+        "status": str(Status.OPTIMAL if ok else Status.INACCURATE),
+    }
 
 
 def _load_vstar(
