@@ -97,33 +97,15 @@ INSTALL_HINTS: dict[str, str] = {
     "CUOPT": "pip install cuopt",
 }
 
-#: cvxpy solvers that accept an LP (quadratic-only or conic-only names excluded).
-LP_CAPABLE: tuple[str, ...] = (
-    "HIGHS",
-    "CLARABEL",
-    "SCIPY",
-    "GLPK",
-    "CVXOPT",
-    "ECOS",
-    "SCS",
-    "OSQP",
-    "PDLP",
-    "GLOP",
-    "CBC",
-    "GUROBI",
-    "MOSEK",
-    "COPT",
-    "XPRESS",
-    "CPLEX",
-    "PIQP",
-    "QOCO",
-)
-
-
 def installed_lp_solvers() -> list[str]:
-    """The LP-capable cvxpy solvers installed here, HiGHS and Clarabel first."""
-    have = set(cp.installed_solvers())
-    return [s for s in LP_CAPABLE if s in have]
+    """The LP-capable cvxpy solvers installed here, HiGHS and Clarabel first.
+
+    Read from cvxpy's solver classes at run time
+    (:func:`lpbounds.solver_catalog.lp_capable_solvers`), not from a hand-kept list.
+    """
+    from ..solver_catalog import lp_capable_solvers
+
+    return list(lp_capable_solvers())
 
 
 def resolve_solver(name: str) -> str:
