@@ -310,10 +310,7 @@ class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
         if data.get(s.UPPER_BOUNDS) is not None:
             lp.col_upper = np.asarray(data[s.UPPER_BOUNDS], dtype=np.float64)
         h = quiet_highs()
-        for key, value in _unpacked(solver_opts).items():
-            if not _option_ok(h, key, value):
-                raise ValueError(f"HIGHS rejected the option {key}={value!r}")
-        h.setOptionValue("output_flag", bool(verbose))
+        set_options(h, solver_opts, verbose)  # a ValidationError is a ValueError, as cvxpy expects
         lp.pass_to(h)
         h.run()
         sol = h.getSolution()
