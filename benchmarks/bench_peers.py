@@ -398,7 +398,7 @@ else:
     mdp = lb.garnet(2_048_000 if KIND == "garnet-paper" else 256_000, 3, 5, 0.9, seed=2048,
                     shared_probabilities=True)
 t = time.perf_counter()
-r = lb.solve_exact(mdp, {method!r})
+r = lb.solve_exact(mdp, {method!r}{extra})
 ts = time.perf_counter() - t
 t_end = stamp()
 out = {{"seconds": ts, "end": t_end, "sweeps": r.sweeps, "iterations": r.iterations}}
@@ -518,15 +518,18 @@ print(json.dumps({"rows": out}))
 """
 
 
-def dp_task(kind: str, tool: str, method: str = "mpi") -> dict:
-    """Run one exact-DP task in a fresh process; adds ``whole`` (launch to answer)."""
-    task = DP_TASKS[tool].format(method=method) if tool == "lpbounds" else DP_TASKS[tool]
+def dp_task(kind: str, tool: str, method: str = "mpi", extra: str = "") -> dict:
+    """Run one exact-DP task in a fresh process; adds ``whole`` (launch to answer).
+    ``extra``: more keyword arguments of lpbounds' ``solve_exact`` (source text)."""
+    task = (
+        DP_TASKS[tool].format(method=method, extra=extra) if tool == "lpbounds" else DP_TASKS[tool]
+    )
     code = DP_BUILD.format(kind=kind) + DP_CHECK + task
     if tool == "lpbounds":
         code += "v = r.values\n"
     code += "check(v, out)\n"
     launch = time.time()
-    label = f"{kind}/{tool}" + (f"-{method}" if tool == "lpbounds" else "")
+    label = f"{kind}/{tool}" + (f"-{method}{extra}" if tool == "lpbounds" else "")
     out = run(code, label, timeout=900)
     if "end" in out:
         out["whole"] = out["end"] - launch
@@ -551,6 +554,9 @@ def main_dp(args: argparse.Namespace) -> None:
                 R.setdefault(f"{kind}/{tool}", []).append(dp_task(kind, tool))
             if rep == 0:
                 R.setdefault(f"{kind}/lpbounds-ipi", []).append(dp_task(kind, "lpbounds", "ipi"))
+                R.setdefault(f"{kind}/lpbounds-mpi5", []).append(
+                    dp_task(kind, "lpbounds", "mpi", ", eval_sweeps=5")
+                )
     load1 = os.getloadavg()
     tmp = Path(os.environ.get("TMPDIR", "/tmp")) / "lpbounds-bench-peers"
     tmp.mkdir(parents=True, exist_ok=True)
@@ -560,7 +566,8 @@ def main_dp(args: argparse.Namespace) -> None:
 
 def dp_body(R: dict, args: argparse.Namespace, load0, load1, wall: float) -> str:
     names = {
-        "lpbounds": "lpbounds `solve_exact` (default: MPI)",
+        "lpbounds": "lpbounds `solve_exact` (default: MPI, `eval_sweeps='auto'`)",
+        "lpbounds-mpi5": "lpbounds `solve_exact(eval_sweeps=5)` (the old default)",
         "lpbounds-ipi": "lpbounds `solve_exact(method='ipi')`",
         "scipy": "plain scipy MPI loop (30 lines)",
         "quantecon": "QuantEcon DiscreteDP MPI (k = 5)",
@@ -572,7 +579,14 @@ def dp_body(R: dict, args: argparse.Namespace, load0, load1, wall: float) -> str
         ours = R.get(f"{kind}/lpbounds", [])
         a, aw = med(ours), med(ours, "whole")
         best_in, best_whole = None, None
-        for tool in ("lpbounds", "lpbounds-ipi", "scipy", "quantecon", "mdpsolver"):
+        for tool in (
+            "lpbounds",
+            "lpbounds-mpi5",
+            "lpbounds-ipi",
+            "scipy",
+            "quantecon",
+            "mdpsolver",
+        ):
             runs = R.get(f"{kind}/{tool}", [])
             if not runs:
                 continue
@@ -626,7 +640,8 @@ Machine: {machine()}. Date: {today()}. Versions: {versions()}, quantecon
 {load0[2]:.2f}, at end {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f} (2 cores: above 2 the
 machine was shared with other jobs and every time is inflated, unevenly). Repetitions:
 {args.repeat} (median, all runs in brackets; each task a fresh process; the tools alternate
-within a repetition; lpbounds' IPI and mdpsolver once, mdpsolver with a 900 s limit); the
+within a repetition; lpbounds' IPI, its fixed five evaluation sweeps and mdpsolver once,
+mdpsolver with a 900 s limit); the
 run took {wall / 60:.1f} min.
 
 "solve s" is the solve alone, the model in memory in the tool's own format; "whole s" is

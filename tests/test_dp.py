@@ -188,6 +188,56 @@ def test_property_all_methods_agree(n, a, ll, lam, seed):
         assert np.abs(res.values - ref).max() <= res.error_bound + 1e-9 * max(1, abs(ref).max())
 
 
+@settings(max_examples=20, deadline=None)
+@given(
+    n=st.integers(1, 40),
+    a=st.integers(1, 4),
+    ll=st.integers(1, 4),
+    lam=st.sampled_from([0.0, 0.5, 0.9, 0.99]),
+    frac=st.sampled_from([1.0, 0.6]),
+    seed=st.integers(0, 10_000),
+)
+def test_property_every_eval_sweeps_is_certified(n, a, ll, lam, frac, seed):
+    """MPI with any number of evaluation sweeps, fixed or "auto", stops at the same
+    certified residual: each answer is within its error bound of V* from an independent
+    direct solve, and its reported residual is the true one of the returned vector."""
+    mdp = lb.garnet(n, a, ll, lam, seed=seed, allowed_fraction=frac)
+    ref = reference_solve(mdp)
+    for m in ("auto", 0, 1, 5, 20):
+        res = lb.solve_exact(mdp, eval_sweeps=m)
+        assert res.converged and res.residual <= res.tol
+        assert np.abs(res.values - ref).max() <= res.error_bound + 1e-9 * max(1, abs(ref).max())
+        q = reference_bellman(mdp, res.values)
+        assert np.abs(q.max(axis=1) - res.values).max() == pytest.approx(res.residual, abs=1e-12)
+
+
+def test_auto_eval_sweeps_waits_for_a_settled_policy():
+    """The "auto" rule: no evaluation sweeps after the first improvement or while more
+    than AUTO_SETTLED of the states change their action; AUTO_EVAL_SWEEPS after."""
+    from lpbounds.dp import AUTO_EVAL_SWEEPS, AUTO_SETTLED, _EvalPlan
+
+    n = 1000
+    plan = _EvalPlan("auto")
+    arg = np.zeros(n, dtype=np.int64)
+    assert plan.count(arg) == 0  # the first policy: every state "changed"
+    arg[: int(AUTO_SETTLED * n) + 1] = 1
+    assert plan.count(arg) == 0  # just above the threshold
+    arg[: int(AUTO_SETTLED * n)] = 2
+    assert plan.count(arg) == AUTO_EVAL_SWEEPS  # at it
+    assert plan.count(arg) == AUTO_EVAL_SWEEPS  # unchanged
+    fixed = _EvalPlan(3)
+    assert fixed.ever and fixed.count(arg) == 3 and fixed.count(arg + 1) == 3
+    assert not _EvalPlan(0).ever
+    # on a model: sweeps = improvements + AUTO_EVAL_SWEEPS x (settled improvements), and
+    # the first improvement is followed directly by the second
+    mdp = lb.garnet(3000, 3, 4, 0.95, seed=7)
+    seen: list[int] = []
+    res = lb.solve_exact(mdp, callback=lambda it, r: seen.append(it))
+    extra = res.sweeps - (res.iterations + 1)
+    assert extra % AUTO_EVAL_SWEEPS == 0 and 0 < extra < AUTO_EVAL_SWEEPS * res.iterations
+    assert seen == list(range(res.iterations + 1))
+
+
 # ---------------------------------------------------------------------- issue 10 item 4
 def test_status_is_the_single_source_of_truth():
     """OPTIMAL when the residual reached tol, ITERATION_LIMIT at max_iter; ``converged``

@@ -504,15 +504,16 @@ def test_thread_choice_follows_the_timings(monkeypatch):
         for fast, slow in ((1, 2), (2, 1)):
             ch = dp._ThreadChoice(rows)
             assert ch.many == 2
-            n_cal = 2 * ch.SAMPLES + 1
+            n_cal = ch.n_calibrate
             for i in range(n_cal):
                 k = ch.start("max")
-                assert k == (1 if i % 2 else 2)  # sweep 0 on all threads, then alternating
+                assert k == (1 if i == 1 else 2)  # sweep 0 untimed, one sample on 1 thread
                 ch.stop("max", k, 1.0 if k == fast else 3.0)
-                kp = ch.start("policy")  # another kind: its own choice
-                ch.stop("policy", kp, 0.9 if kp == 2 else 1.0)
-            # all threads only when clearly faster (PREFER): 10% is not enough
-            assert ch.chosen["max"] == fast and ch.chosen["policy"] == 1
+            assert ch.chosen["max"] == fast
+            # another kind adopts the choice instead of paying for its own samples
+            kp = ch.start("policy")
+            assert kp == fast
+            ch.stop("policy", kp, 1.0)
             for _ in range(n_cal, ch.RECHECK):  # no recheck before RECHECK sweeps
                 k = ch.start("max")
                 assert k == fast and numba.get_num_threads() == fast
@@ -525,9 +526,67 @@ def test_thread_choice_follows_the_timings(monkeypatch):
                 ch.stop("max", ch.start("max"), 1.0)
             k = ch.start("max")
             assert k == slow
-            ch.stop("max", k, 0.4)  # much faster: switched
-            assert ch.chosen["max"] == slow
+            ch.stop("max", k, 0.4)  # much faster: switched, for this kind only
+            assert ch.chosen["max"] == slow and ch.chosen["policy"] == fast
             ch.restore()
             assert numba.get_num_threads() == 2
+        # all threads only when clearly faster (PREFER): 10% is not enough
+        ch = dp._ThreadChoice(rows)
+        for _ in range(ch.n_calibrate):
+            k = ch.start("policy")
+            ch.stop("policy", k, 0.9 if k == 2 else 1.0)
+        assert ch.chosen["policy"] == 1 and ch.start("max") == 1
+        ch.restore()
+        # one slow sweep of the chosen count does not flip the choice (median of three)
+        ch = dp._ThreadChoice(rows)
+        for _ in range(ch.n_calibrate):
+            k = ch.start("max")
+            ch.stop("max", k, 1.0 if k == 2 else 3.0)
+        for i in range(ch.n_calibrate, ch.RECHECK):
+            k = ch.start("max")
+            ch.stop("max", k, 5.0 if i == ch.RECHECK - 1 else 1.0)
+        k = ch.start("max")
+        assert k == 1
+        ch.stop("max", k, 3.0)  # faster than the last sweep (5.0), not than the median
+        assert ch.chosen["max"] == 2
+        ch.restore()
     finally:
         numba.set_num_threads(before)
+
+
+# ---------------------------------------------------------------------- packed policy rows
+@pytest.mark.usefixtures("kernel_path")
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    n=st.integers(1, 50),
+    a=st.integers(1, 4),
+    ll=st.integers(1, 4),
+    shared=st.booleans(),
+    frac=st.sampled_from([1.0, 0.5]),
+    seed=st.integers(0, 10_000),
+)
+def test_property_packed_sweep_equals_the_in_place_sweep(n, a, ll, shared, frac, seed):
+    """MPI's evaluation sweeps run on the policy's rows gathered into contiguous arrays
+    (rows.PackedSweeps); each row is computed as by the in-place sweep, so the numbers are
+    the same bit for bit, shared or per-row probabilities, with masks, policy changed
+    between sweeps (the gather reuses its buffers)."""
+    from lpbounds.rows import PackedSweeps
+
+    mdp = lb.garnet(n, a, ll, 0.9, seed=seed, shared_probabilities=shared, allowed_fraction=frac)
+    rows = exact_rows(mdp)
+    rng = np.random.default_rng(seed)
+    packed = rows._evaluator(rows._chunks())
+    assert isinstance(packed, PackedSweeps)
+    assert packed.shared == shared or ll == 1  # one outcome: every row's probability is 1
+    for _ in range(2):  # a second policy into the same buffers
+        counts = np.diff(rows.indptr)
+        sel = rows.indptr[:-1] + (rng.random(n) * counts).astype(np.int64)
+        v = rng.normal(size=n)
+        want = np.empty(n)
+        lo, hi = rows._sweep_policy(sel, v, want, rows._chunks())
+        packed.set_policy(sel)
+        got = np.empty(n)
+        assert packed.sweep(v, got) == (lo, hi)
+        assert np.array_equal(got, want)

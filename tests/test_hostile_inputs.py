@@ -416,6 +416,18 @@ CASES: dict[str, Case] = {
         lambda: lb.solve_exact(MDP, eval_sweeps=-1),
         r"eval_sweeps must lie in \[0, inf\]",
     ),
+    "eval-sweeps-word": (
+        lambda: lb.solve_exact(MDP, eval_sweeps="fast"),
+        r"eval_sweeps must be a non-negative integer or 'auto'; got 'fast'",
+    ),
+    "eval-sweeps-float": (
+        lambda: lb.solve_exact(MDP, eval_sweeps=2.5),
+        r"eval_sweeps must be a non-negative integer or 'auto'; got 2.5",
+    ),
+    "eval-sweeps-bool": (
+        lambda: lb.solve_exact(MDP, eval_sweeps=True),
+        r"eval_sweeps must be a non-negative integer or 'auto'; got True",
+    ),
     "method-unknown": (lambda: lb.solve_exact(MDP, "newton"), r"unknown method 'newton'"),
     "evaluation-unknown": (
         lambda: lb.solve_exact(MDP, "pi", evaluation="lu"),

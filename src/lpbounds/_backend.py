@@ -37,7 +37,7 @@ _GROUPS: dict[str, tuple[str, tuple[float, float], tuple[str, ...]]] = {
     "rows": (
         "Bellman-row sweeps",
         (3.0, 6.0),
-        ("q_values", "bellman_max_stats", "policy_sweep_stats", "bellman_maxmin"),
+        ("q_values", "bellman_max_stats", "policy_sweep_stats", "bellman_maxmin", "gather_rows"),
     ),
     "post-decision": (
         "post-decision sweeps",

@@ -152,6 +152,24 @@ def policy_sweep_stats(rows, reward, targets, probs, discount, v, out, nchunks):
     return lo.min(), hi.max()
 
 
+@njit(parallel=True, **_OPTS)
+def gather_rows(
+    sel, reward, targets, probs, out_reward, out_targets, out_probs, copy_probs
+):  # pragma: no cover - compiled
+    """Row ``sel[i]`` into slot ``i`` of the ``out_*`` arrays (``out_probs`` only when
+    ``copy_probs``; a shared distribution is not copied)."""
+    n = sel.shape[0]
+    n_out = targets.shape[1]
+    for i in prange(n):
+        r = sel[i]
+        out_reward[i] = reward[r]
+        for ll in range(n_out):
+            out_targets[i, ll] = targets[r, ll]
+        if copy_probs:
+            for ll in range(n_out):
+                out_probs[i, ll] = probs[r, ll]
+
+
 # ---------------------------------------------------------------------- post-decision form
 # Fast path of :class:`lpbounds.rows.PostDecisionRows`: when every allowed pair's outcome
 # tuple is a function of its first successor ``y = f(x, u, Y_0)``, a sweep computes

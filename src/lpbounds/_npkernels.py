@@ -122,6 +122,15 @@ def policy_sweep_stats(rows, reward, targets, probs, discount, v, out, nchunks):
     return _extremes(out - v)
 
 
+def gather_rows(sel, reward, targets, probs, out_reward, out_targets, out_probs, copy_probs):
+    """Row ``sel[i]`` into slot ``i`` of the ``out_*`` arrays (``out_probs`` only when
+    ``copy_probs``)."""
+    out_reward[:] = reward[sel]
+    out_targets[:] = targets[sel]
+    if copy_probs:
+        out_probs[:] = probs[sel]
+
+
 def check_successors(succ, allow, n):
     """Out-of-range successors: (count on allowed pairs, first flat index, count elsewhere)."""
     bad = (succ < 0) | (succ >= n)

@@ -452,6 +452,10 @@ class BellmanRows:
         )
         return float(lo), float(hi)
 
+    def _evaluator(self, nchunks: int) -> PolicySweeps:
+        """Evaluation sweeps of one policy at a time, on its rows packed (:class:`PackedSweeps`)."""
+        return PackedSweeps(self, nchunks)
+
     def zero_rewards(self) -> np.ndarray:
         """Zeros in the layout of the rewards: ``_sweep_policy(..., reward=zeros)`` computes
         ``discount * P_pi v`` (the product of inexact policy iteration, :mod:`lpbounds.dp`)."""
@@ -541,6 +545,64 @@ class BellmanRows:
         share = np.divide(vals, counts, out=np.zeros_like(vals), where=counts > 0)
         out[self.pair_tight] = share[tight_rows]
         return out
+
+
+class PolicySweeps:
+    """Evaluation sweeps of the policy last set: ``set_policy(arg)`` with the ``arg`` of an
+    improvement sweep, then ``sweep(v, out)`` writes ``T_pi v`` and returns the extremes
+    of ``T_pi v - v`` (what MPI runs between improvements)."""
+
+    def __init__(self, ops: Any, nchunks: int, **kw: Any) -> None:
+        self.ops = ops
+        self.nchunks = nchunks
+        self.kw = kw
+        self.arg: np.ndarray | None = None
+
+    def set_policy(self, arg: np.ndarray) -> None:
+        self.arg = arg
+
+    def sweep(self, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:
+        assert self.arg is not None
+        return self.ops._sweep_policy(self.arg, v, out, self.nchunks, **self.kw)
+
+
+class PackedSweeps(PolicySweeps):
+    """Evaluation sweeps on the policy's rows gathered into contiguous arrays.
+
+    A row system's rows of owner ``i`` sit together, so ``T_pi`` read in place hops over
+    the rows of the other actions and streams about ``A`` times the data it uses. One
+    gather per policy (the rows ``arg[i]`` into slot ``i``: rewards, targets, and the
+    probabilities unless one distribution is shared) makes every later sweep stream only
+    its own rows. Each row is then computed by the same kernel with the same arithmetic,
+    so the numbers are identical to the in-place sweep's. Measured on the 2,048,000 x 3 x 5
+    garnet (issue 17): a sweep 26 ms against 34 ms on two threads (52 against 71 on one),
+    the gather 9 ms; MPI does five sweeps per gather.
+    """
+
+    def __init__(self, ops: BellmanRows, nchunks: int) -> None:
+        super().__init__(ops, nchunks)
+        n, n_out = ops.n_vars, ops.n_outcomes
+        probs = np.asarray(ops.probs)
+        self.shared = probs.ndim == 2 and probs.strides[0] == 0
+        self.index = np.arange(n, dtype=np.int64)
+        self.reward = np.empty(n)
+        self.targets = np.empty((n, n_out), dtype=ops.targets.dtype)
+        self.probs = probs[:n] if self.shared else np.empty((n, n_out))
+
+    def set_policy(self, arg: np.ndarray) -> None:
+        ops = self.ops
+        probs_out = np.empty((0, ops.n_outcomes)) if self.shared else self.probs
+        ops._k().gather_rows(
+            arg, ops.reward, ops.targets, ops.probs, self.reward, self.targets, probs_out,
+            not self.shared,
+        )  # fmt: skip
+
+    def sweep(self, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:
+        lo, hi = self.ops._k().policy_sweep_stats(
+            self.index, self.reward, self.targets, self.probs, self.ops.discount, v, out,
+            self.nchunks,
+        )  # fmt: skip
+        return float(lo), float(hi)
 
 
 @dataclass(frozen=True, eq=False)
@@ -664,6 +726,11 @@ class PostDecisionRows:
     def reward_absmax(self) -> float:
         """``max |R_u(x)|`` over allowed pairs (disallowed rewards are stored as 0)."""
         return float(np.abs(self.reward).max(initial=0.0))
+
+    def _evaluator(self, nchunks: int, w: np.ndarray | None = None) -> PolicySweeps:
+        """Evaluation sweeps of one policy at a time (in place: a sweep reads one ``W`` per
+        state, nothing to pack)."""
+        return PolicySweeps(self, nchunks, w=w)
 
     def new_work(self) -> np.ndarray:
         """A buffer for ``W`` to pass to the sweeps: one per solve, reused by its sweeps (a

@@ -44,10 +44,11 @@ def test_the_compiled_case_is_above_the_numpy_threshold():
     assert p.n_states * 3 * (p.m + 1) >= SMALL_READS
 
 
-def test_vstar_bit_for_bit(case):
+@pytest.mark.parametrize("eval_sweeps", ["auto", 5])
+def test_vstar_bit_for_bit(case, eval_sweeps):
     _, _, _, mdp, mf = case
-    ref = solve_exact(mdp)
-    got = solve_vstar(mf)
+    ref = solve_exact(mdp, eval_sweeps=eval_sweeps)
+    got = solve_vstar(mf, eval_sweeps=eval_sweeps)
     assert np.array_equal(got.values, ref.values)
     assert np.array_equal(got.policy.astype(np.int64), ref.policy)
     assert (got.iterations, got.sweeps) == (ref.iterations, ref.sweeps)

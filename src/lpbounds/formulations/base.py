@@ -97,6 +97,7 @@ INSTALL_HINTS: dict[str, str] = {
     "CUOPT": "pip install cuopt",
 }
 
+
 def installed_lp_solvers() -> list[str]:
     """The LP-capable cvxpy solvers installed here, HiGHS and Clarabel first.
 

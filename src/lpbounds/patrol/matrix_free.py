@@ -21,7 +21,7 @@ Every Q-value is computed with the array path's arithmetic, in its order:
 ``q = R_u(x) + lambda W`` with ``R_u(x)`` the float :meth:`PatrolModel.rewards` stores;
 the maximum keeps the first maximising action; a sweep returns the extremes of
 ``T v - v``. :func:`solve_vstar` runs the iteration of :func:`lpbounds.solve_exact`
-(MPI with five evaluation sweeps, the Porteus shift carried as a scalar offset through
+(MPI with the same ``eval_sweeps`` rule, the Porteus shift carried as a scalar offset through
 :func:`lpbounds.dp._offset_step`, the default tolerance ``DP_RTOL max|R| / (1 -
 lambda)``), and :func:`evaluate_policy` that of :func:`lpbounds.evaluate_policy`'s
 iterative method, so both return the array path's vectors bit for bit
@@ -44,12 +44,19 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, cast
+from typing import Any, Literal, cast
 
 import numpy as np
 from numba import njit, prange
 
-from ..dp import PolicyEvaluation, _offset_step, _ThreadChoice, _threads_for
+from ..dp import (
+    PolicyEvaluation,
+    _check_eval_sweeps,
+    _EvalPlan,
+    _offset_step,
+    _ThreadChoice,
+    _threads_for,
+)
 from ..errors import ConvergenceError, ValidationError
 from ..status import Status
 from ..tolerances import DP_RTOL, dp_scale, error_bound
@@ -840,7 +847,7 @@ def _check_finite(what: str, v: np.ndarray, res: float) -> float:
 def solve_vstar(
     mf: MatrixFreePatrol,
     *,
-    eval_sweeps: int = 5,
+    eval_sweeps: int | Literal["auto"] = "auto",
     max_iter: int = 100_000,
     tol: float | None = None,
     callback: Callback | None = None,
@@ -852,8 +859,9 @@ def solve_vstar(
     Parameters
     ----------
     mf : MatrixFreePatrol
-    eval_sweeps : int
-        Evaluation sweeps per improvement step (``solve_exact``'s default 5).
+    eval_sweeps : int or "auto"
+        Evaluation sweeps per improvement step, as in :func:`lpbounds.solve_exact`
+        (default ``"auto"``: none while the policy changes).
     max_iter : int
         Limit on improvement steps.
     tol : float, optional
@@ -868,7 +876,7 @@ def solve_vstar(
     MatrixFreeSolution
     """
     t0 = time.perf_counter()
-    eval_sweeps = check_int("eval_sweeps", eval_sweeps, lo=0)
+    eval_sweeps = _check_eval_sweeps(eval_sweeps)
     max_iter = check_int("max_iter", max_iter, lo=1)
     tol_ = mf.default_tol() if tol is None else float(tol)
     if not tol_ > 0:
@@ -895,7 +903,11 @@ def solve_vstar(
 
 
 def _mpi(
-    mf: MatrixFreePatrol, tol: float, max_iter: int, eval_sweeps: int, callback: Callback | None
+    mf: MatrixFreePatrol,
+    tol: float,
+    max_iter: int,
+    eval_sweeps: int | Literal["auto"],
+    callback: Callback | None,
 ) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
     """:func:`lpbounds.dp._iterate`'s loop (MPI, Porteus shift as a scalar offset) in two
     vectors: the result is formed in place."""
@@ -905,6 +917,7 @@ def _mpi(
     arg = np.zeros(mf.n_vars, dtype=np.int8)
     hist: list[float] = []
     sweeps, c, ok, its, res = 0, 0.0, False, max_iter, np.inf
+    plan = _EvalPlan(eval_sweeps)
     for it in range(max_iter + 1):
         lo, hi = mf.sweep_max(u, buf, arg)
         sweeps += 1
@@ -920,7 +933,7 @@ def _mpi(
             break
         c = c_next
         u, buf = buf, u
-        for _ in range(eval_sweeps):
+        for _ in range(plan.count(arg) if plan.ever else 0):
             lo, hi = mf.sweep_policy(arg, u, buf)
             sweeps += 1
             _, _, c = _offset_step(lam, c, lo, hi, True)
