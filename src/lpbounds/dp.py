@@ -50,9 +50,10 @@ Inexact policy iteration
 self-loop preconditioned, products from the policy sweep with zero rewards) stopped at
 ``max(IPI_FORCING * res, tol / 2)`` in the max norm. The stopping rule and certificate
 are those above: the residual of the returned vector is measured by a full sweep, so the
-evaluation's accuracy only affects speed. It is opt-in: measured against MPI (sweep
-equivalents; improvement sweeps plus GMRES products, 2 cores) it lost on every large
-model and won only on small slow-mixing ones:
+evaluation's accuracy only affects speed. It is opt-in: measured against MPI with five
+evaluation sweeps per improvement (sweep equivalents; improvement sweeps plus GMRES
+products, 2 cores; ``eval_sweeps="auto"`` needs fewer still on the large models) it lost on
+every large model and won only on small slow-mixing ones:
 
 * the ported peer test models (tests/interop): pymdptoolbox's forest with 1,000 states
   and discount 0.99, MPI 157 sweeps (44 ms), IPI 57 (26 ms); MDPSolver's test 1
