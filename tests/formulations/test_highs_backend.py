@@ -198,3 +198,12 @@ def test_cvxpy_path_reports_an_infeasible_modification_as_infeasible():
     res = form.solve("HIGHS", extra_constraints=[form.v[0] <= low], raise_on_failure=False)
     assert res.status is lb.Status.INFEASIBLE and np.isnan(res.x).all()
     assert res.extra["message"] == "infeasible" and res.extra["highs_status"] == "kInfeasible"
+
+
+def test_dual_ray_of_a_highspy_without_get_dual_ray():
+    """highspy 1.7 (the minimum version) has no getDualRay: an infeasible LP through the cvxpy
+    path then carries no ray (NaN) instead of failing with AttributeError."""
+    from lpbounds.formulations._highs import _dual_ray
+
+    st, has_ray, ray = _dual_ray(object(), 3)
+    assert st is None and has_ray is False and ray.shape == (3,) and np.isnan(ray).all()

@@ -264,6 +264,16 @@ def tight_basis(n_rows: int, n_cols: int, tight_rows: np.ndarray) -> Any:
 
 
 # ---------------------------------------------------------------------------- cvxpy adapter
+def _dual_ray(h: Any, n_rows: int) -> tuple[Any, bool, np.ndarray]:
+    """HiGHS' dual ray of an infeasible LP in cvxpy's row sense (``<=``; ours are ``>=``).
+    highspy before 1.8 has no ``getDualRay``: then no ray (NaN), which newer cvxpy reads
+    as dual values it cannot certify and 1.6 does not read at all."""
+    if not hasattr(h, "getDualRay"):
+        return None, False, np.full(n_rows, np.nan)
+    st, has_ray, ray = h.getDualRay()
+    return st, bool(has_ray), -np.asarray(ray, dtype=np.float64)
+
+
 class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
     """cvxpy's HiGHS interface, passing the inequality rows as ``>=`` rows.
 
@@ -325,6 +335,5 @@ class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
             "run_time": h.getRunTime(),
         }
         if self.model_status == "kInfeasible":
-            st, has_ray, ray = h.getDualRay()
-            results["dual_ray"] = (st, has_ray, -np.asarray(ray, dtype=np.float64))
+            results["dual_ray"] = _dual_ray(h, b.size)
         return results
