@@ -91,7 +91,6 @@ kernels and say so on the ``lpbounds`` logger when they compile first.
 from __future__ import annotations
 
 import functools
-import numbers
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -114,6 +113,7 @@ from .validation import (
     check_int,
     check_real,
     check_vector,
+    is_int,
 )
 
 __all__ = [
@@ -495,7 +495,7 @@ def _check_eval_sweeps(eval_sweeps: Any) -> int | Literal["auto"]:
     """``eval_sweeps``: ``"auto"`` or a non-negative integer."""
     if isinstance(eval_sweeps, str) and eval_sweeps == "auto":
         return "auto"
-    if not isinstance(eval_sweeps, numbers.Integral) or isinstance(eval_sweeps, (bool, np.bool_)):
+    if not is_int(eval_sweeps):
         raise ValidationError(
             f"eval_sweeps must be a non-negative integer or 'auto'; got {eval_sweeps!r}"
         )
@@ -784,12 +784,12 @@ def _iterate(
                 break
             c = c_next
             u, buf = buf, u
-            m = plan.count(arg) if evaluator is not None else 0
-            if m:
-                assert evaluator is not None
-                evaluator.set_policy(arg)
+            m = plan.count(arg)
+            if m == 0:
+                continue
+            assert evaluator is not None  # plan.ever
+            evaluator.set_policy(arg)
             for _ in range(m):
-                assert evaluator is not None
                 k = threads.start("policy")
                 t = time.perf_counter()
                 lo, hi = evaluator.sweep(u, buf)

@@ -588,13 +588,15 @@ class PackedSweeps(PolicySweeps):
         self.reward = np.empty(n)
         self.targets = np.empty((n, n_out), dtype=ops.targets.dtype)
         self.probs = probs[:n] if self.shared else np.empty((n, n_out))
+        # gather_rows writes no probabilities when they are shared; it is still typed with
+        # a writable array (the broadcast view is read-only)
+        self._probs_out = np.empty((0, n_out)) if self.shared else self.probs
 
     def set_policy(self, arg: np.ndarray) -> None:
         ops = self.ops
-        probs_out = np.empty((0, ops.n_outcomes)) if self.shared else self.probs
         ops._k().gather_rows(
-            arg, ops.reward, ops.targets, ops.probs, self.reward, self.targets, probs_out,
-            not self.shared,
+            arg, ops.reward, ops.targets, ops.probs, self.reward, self.targets,
+            self._probs_out, not self.shared,
         )  # fmt: skip
 
     def sweep(self, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:

@@ -46,6 +46,7 @@ __all__ = [
     "check_vector",
     "entry",
     "first_index",
+    "is_int",
 ]
 
 #: Largest accepted scale of a value function, ``max|R| / (1 - discount)`` (the largest
@@ -84,7 +85,8 @@ def _is_real(x: Any) -> bool:
     return isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_))
 
 
-def _is_int(x: Any) -> bool:
+def is_int(x: Any) -> bool:
+    """True for an integer (Python or NumPy), False for booleans and everything else."""
     return isinstance(x, numbers.Integral) and not isinstance(x, (bool, np.bool_))
 
 
@@ -137,7 +139,7 @@ def check_real(
 
 def check_int(name: str, x: Any, *, lo: int | None = None, hi: int | None = None) -> int:
     """``x`` as an int, refusing booleans, strings and floats (even ``3.0``); ``lo <= x <= hi``."""
-    if not _is_int(x):
+    if not is_int(x):
         raise ValidationError(f"{name} must be an integer; got {_show(x)}")
     v = int(x)
     if (lo is not None and v < lo) or (hi is not None and v > hi):
@@ -189,7 +191,7 @@ def _check_kind(name: str, arr: np.ndarray, integer: bool) -> np.ndarray:
         return arr
     if kind == "O":
         for idx, item in np.ndenumerate(arr):
-            if not (_is_int(item) if integer else _is_real(item)):
+            if not (is_int(item) if integer else _is_real(item)):
                 raise ValidationError(
                     f"{entry(name, idx)} = {_show(item)} is not "
                     f"{'an integer' if integer else 'a real number'}"

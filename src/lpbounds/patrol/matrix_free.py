@@ -933,7 +933,7 @@ def _mpi(
             break
         c = c_next
         u, buf = buf, u
-        for _ in range(plan.count(arg) if plan.ever else 0):
+        for _ in range(plan.count(arg)):
             lo, hi = mf.sweep_policy(arg, u, buf)
             sweeps += 1
             _, _, c = _offset_step(lam, c, lo, hi, True)
