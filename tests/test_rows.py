@@ -190,7 +190,7 @@ def test_from_arrays_validation():
         lb.BellmanRows.from_arrays([0, 0], [0, 1], [1.0, 2.0], [[0], [0]], [1.0], 0.9, 2)
     with pytest.raises(ValidationError, match="out of range"):
         lb.BellmanRows.from_arrays([0], [0], [1.0], [[3]], [1.0], 0.9, 2)
-    with pytest.raises(ValidationError, match="sum to 1"):
+    with pytest.raises(ValidationError, match=r"probs\[0, :\] sum to 0.7, not 1"):
         lb.BellmanRows.from_arrays([0], [0], [1.0], [[0, 0]], [0.5, 0.2], 0.9, 1)
     rows = lb.BellmanRows.from_arrays(
         [1, 0, 1], [1, 0, 0], [1, 2, 3], [[0], [1], [1]], [1.0], 0.5, 2

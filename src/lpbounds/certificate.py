@@ -38,6 +38,7 @@ import numpy as np
 
 from .errors import ValidationError
 from .rows import BellmanRows
+from .stochastic import bellman_margin
 
 __all__ = [
     "Certificate",
@@ -166,14 +167,12 @@ def dual_objective_bound(
 
 def contraction_modulus(rows: BellmanRows) -> float:
     """``lambda * max_r sum_l p_{r,l}``, rounded up; an error if it is not below 1."""
-    probs = np.asarray(rows.probs)
-    n_out = max(1, rows.n_outcomes)
-    smax = float(probs.sum(axis=1).max(initial=0.0)) if probs.size else 0.0
-    kappa = rows.discount * max(smax, 0.0) * (1.0 + (n_out + 3) * _EPS)
+    sums = rows.row_sums()
+    kappa = sums.modulus(rows.discount)
     if not kappa < 1.0:
         raise ValidationError(
-            f"cannot certify: discount {rows.discount} times the largest row sum {smax!r} is "
-            "not below 1, so the rows are not a contraction"
+            f"cannot certify: discount {rows.discount} times the largest row sum "
+            f"{sums.computed_max!r} is not below 1, so the rows are not a contraction"
         )
     return kappa
 
@@ -212,15 +211,7 @@ def certify(rows: BellmanRows, v: Any, operator: Operator = "max") -> Certificat
     v_abs = float(np.abs(vv).max(initial=0.0))
     tv_abs = float(np.abs(tv).max(initial=0.0))
     n_out = rows.n_outcomes
-    margin = (
-        2.0
-        * (
-            (n_out + 3) * _EPS * (r_abs + kappa * v_abs)
-            + _EPS * (tv_abs + v_abs)
-            + n_out * _EPS * kappa * v_abs
-        )
-        + 4.0 * _TINY
-    )
+    margin = bellman_margin(n_out, r_abs, kappa, v_abs, tv_abs)
     one_minus = (1.0 - kappa) * (1.0 - 2.0 * _EPS)
     c_up = (d_up + margin) / one_minus * (1.0 + 4.0 * _EPS)
     c_down = (d_down + margin) / one_minus * (1.0 + 4.0 * _EPS)

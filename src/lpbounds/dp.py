@@ -13,8 +13,12 @@ The solvers stop when the Bellman residual of the vector they return,
 ``||T V - V||_inf``, is at most ``tol`` (default ``DP_RTOL * max|R| / (1 - lambda)``),
 and report that residual, measured on the returned vector. It implies
 
-* ``||V - V*||_inf <= residual / (1 - lambda)`` (reported as ``error_bound``), and
-* ``||T V - V*||_inf <= lambda / (1 - lambda) * residual`` for one more application of T.
+* ``||V - V*||_inf <= residual / (1 - kappa)`` (reported as ``error_bound``), and
+* ``||T V - V*||_inf <= kappa / (1 - kappa) * residual`` for one more application of T,
+
+where ``kappa = lambda max_r sum_l p_{r,l}`` (rounded up, :func:`modulus`) is the
+contraction modulus of the rows *as stored*: ``lambda`` itself when every row sums to
+one, larger for accepted rows summing to ``1 + 1e-9`` (``docs/tolerances.md``, "Row sums").
 
 Value iteration and MPI use the Porteus/MacQueen extrapolation: after a sweep
 ``V' = T V`` with ``r = V' - V``, the constant ``lambda / (1 - lambda) * (min r + max r) / 2``
@@ -104,7 +108,8 @@ from .errors import ConvergenceError, ValidationError
 from .mdp import FiniteMDP
 from .rows import BellmanRows, PostDecisionRows
 from .status import Status
-from .tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
+from .stochastic import RowSums, bellman_margin
+from .tolerances import DP_OFFSET_ROWSUM_ATOL, DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
 from .validation import (
     MAX_VALUE_SCALE,
     check_array,
@@ -326,6 +331,19 @@ class PorteusBounds:
     With ``alpha = T V - V`` and ``pi`` greedy w.r.t. ``V``:
     ``lower_paper = V + min(alpha) / (1 - lambda) <= lower = T V + lambda/(1-lambda) min(alpha)
     <= V_pi <= V* <= upper = T V + lambda/(1-lambda) max(alpha)``.
+
+    For rows whose exact sums lie in ``[lo, hi]`` (:class:`lpbounds.stochastic.RowSums`;
+    ``lo = hi = 1`` is the textbook case) each ``lambda`` above is ``lambda s``, with
+    the ``s`` in ``{lo, hi}`` that makes the bound weakest: ``T^{k+1} V - T^k V >= a``
+    implies ``T^{k+2} V - T^{k+1} V >= lambda s a`` for ``s = lo`` when ``a >= 0`` and
+    ``s = hi`` when ``a < 0`` (and the mirror image above), so the tail of the series
+    sums to ``a lambda s / (1 - lambda s)``.
+
+    In floating point: ``alpha``'s extremes are widened by the rounding allowance of a
+    computed ``T V - V`` (:func:`lpbounds.stochastic.bellman_margin`), every factor is
+    rounded away from the bound and the bounds are rounded outward by one ulp, so they
+    hold for the exact ``V_pi`` and ``V*`` of the stored rows (tested against exact
+    rational arithmetic in ``tests/test_row_sums.py``).
     """
 
     lower: np.ndarray
@@ -438,7 +456,7 @@ def solve_exact(
         )
     return _result(
         method, v, _policy_out(model, rows, arg), arg, res, tol_, its, sweeps, ok, hist,
-        rows.discount, t0, raise_on_failure,
+        modulus(rows), t0, raise_on_failure,
     )  # fmt: skip
 
 
@@ -453,7 +471,7 @@ def _result(
     sweeps: int,
     ok: bool,
     hist: list[float],
-    discount: float,
+    kappa: float,
     t0: float,
     raise_on_failure: bool,
 ) -> DPResult:
@@ -480,7 +498,7 @@ def _result(
         policy=policy,
         policy_rows=policy_rows,
         residual=res,
-        error_bound=error_bound(res, vmax, discount),
+        error_bound=error_bound(res, vmax, kappa),
         tol=tol,
         iterations=its,
         sweeps=sweeps,
@@ -556,7 +574,7 @@ def _solve_post_decision(
         )
     return _result(
         method, v, act.astype(np.int64), ps.rows_of(act), res, tol_, its, sweeps, ok, hist,
-        ps.discount, t0, raise_on_failure,
+        modulus(ps), t0, raise_on_failure,
     )  # fmt: skip
 
 
@@ -707,20 +725,62 @@ class _ThreadChoice:
         self._set(self.many)
 
 
-def _offset_step(
-    lam: float, c: float, lo: float, hi: float, extrapolate: bool
-) -> tuple[float, float, float]:
+class PorteusShift:
     """The Porteus offset algebra of an iterate ``v = u + c``, shared by every sweep loop.
 
     Given the extremes ``lo, hi`` of ``T u - u`` (``T`` a max, game or fixed-policy
-    operator), return the extremes of ``T v - v = (T u - u) - (1 - lambda) c`` and the
-    offset after the sweep: ``T v = T u + lambda c``, plus the shift
-    ``lambda / (1 - lambda)`` times the residual's midpoint when extrapolating.
+    operator of rows whose exact sums lie in ``[1 - delta, 1 + delta]``),
+    :meth:`step` returns the residual of ``v`` and the offset after the sweep.
+    ``T(v) = T u + lambda c`` holds for stochastic rows; in general each row gains
+    ``lambda s_r c``, so the residual extremes of ``v`` are those of ``T u - u`` less
+    ``(1 - lambda) c``, within ``lambda |c| delta``, which :meth:`step` adds to the
+    residual it returns: the residual is a bound on the true one, whatever the rows.
+
+    Two modes (:data:`~lpbounds.tolerances.DP_OFFSET_ROWSUM_ATOL` decides):
+
+    * rows stochastic to rounding (``delta`` at most that, every model whose rows were
+      normalised): the offset is carried as a scalar (``u + c`` formed once, at the
+      end) and the shift is ``lambda / (1 - lambda)`` times the residual's midpoint;
+    * rows that are not (accepted sums ``1 +- 1e-9``): :meth:`settle` adds the offset to
+      the iterate after every sweep, so ``c`` is 0 at each sweep and the residual is
+      exactly the computed one, and the shift uses the mean effective discount
+      ``kappa_m = lambda (lo + hi) / 2`` of the rows: ``kappa_m / (1 - kappa_m)``. The
+      constant error mode then contracts by ``lambda (s_r - (lo + hi)/2) / (1 - kappa_m)
+      < 1`` whenever ``lambda hi < 1``, which the model's validation guarantees.
     """
-    lo -= (1.0 - lam) * c
-    hi -= (1.0 - lam) * c
-    c_next = lam * c + (lam / (1.0 - lam) * 0.5 * (lo + hi) if extrapolate else 0.0)
-    return lo, hi, c_next
+
+    def __init__(self, discount: float, sums: RowSums) -> None:
+        self.lam = float(discount)
+        self.delta = sums.delta
+        self.fold = self.delta > DP_OFFSET_ROWSUM_ATOL
+        if self.fold:
+            km = self.lam * 0.5 * (sums.lo + sums.hi)
+            self.gain = km / (1.0 - km)
+        else:
+            self.gain = self.lam / (1.0 - self.lam)
+
+    def step(self, c: float, lo: float, hi: float, extrapolate: bool) -> tuple[float, float]:
+        """``(residual of u + c, offset after the sweep)`` from the extremes of ``T u - u``."""
+        lam = self.lam
+        lo -= (1.0 - lam) * c
+        hi -= (1.0 - lam) * c
+        c_next = lam * c + (self.gain * 0.5 * (lo + hi) if extrapolate else 0.0)
+        res = max(-lo, hi)
+        if c != 0.0 and self.delta > 0.0:
+            res += lam * abs(c) * self.delta
+        return res, c_next
+
+    def settle(self, u: np.ndarray, c: float) -> float:
+        """The offset to carry into the next sweep: ``c``, or 0 after ``u += c`` (folding)."""
+        if self.fold and c != 0.0:
+            u += c
+            return 0.0
+        return c
+
+
+def modulus(ops: BellmanRows | PostDecisionRows) -> float:
+    """``lambda max_r sum_l p_{r,l}`` rounded up: the contraction modulus the error bounds use."""
+    return ops.row_sums().modulus(ops.discount)
 
 
 @_serial_if_small
@@ -740,9 +800,10 @@ def _iterate(
     ``T(u + c) = T u + lambda c`` (and likewise for a fixed policy and for the game
     operator), a sweep computes ``T u`` and the extremes of ``T u - u`` in one pass, the
     residual extremes of ``v`` are those less ``(1 - lambda) c``, and the shift only
-    updates ``c``. ``u + c`` is formed once, at the end.
+    updates ``c``. ``u + c`` is formed once, at the end (:class:`PorteusShift`: rows
+    that are not stochastic to rounding fold the offset into ``u`` after every sweep).
     """
-    lam = rows.discount
+    shift = PorteusShift(rows.discount, rows.row_sums())
     nchunks = rows._chunks()
     sweeps = 0
     hist: list[float] = []
@@ -773,8 +834,7 @@ def _iterate(
                 lo, hi = rows._sweep_max(u, buf, arg, nchunks, **kw)
             threads.stop("max", k, time.perf_counter() - t)
             sweeps += 1
-            lo, hi, c_next = _offset_step(lam, c, lo, hi, extrapolate)
-            res = max(-lo, hi)
+            res, c_next = shift.step(c, lo, hi, extrapolate)
             hist.append(res)
             if callback is not None:
                 callback(it, res)
@@ -782,8 +842,8 @@ def _iterate(
                 return u + c, arg, res, it, sweeps, True, hist
             if it == max_iter:
                 break
-            c = c_next
             u, buf = buf, u
+            c = shift.settle(u, c_next)
             m = plan.count(arg)
             if m == 0:
                 continue
@@ -795,8 +855,9 @@ def _iterate(
                 lo, hi = evaluator.sweep(u, buf)
                 threads.stop("policy", k, time.perf_counter() - t)
                 sweeps += 1
-                _, _, c = _offset_step(lam, c, lo, hi, extrapolate)
+                _, c_next = shift.step(c, lo, hi, extrapolate)
                 u, buf = buf, u
+                c = shift.settle(u, c_next)
     finally:
         threads.restore()
     return u + c, arg, res, max_iter, sweeps, False, hist
@@ -954,7 +1015,7 @@ def solve_game(
         rows, v, tol_, max_iter, 0, True, callback, game=True
     )
     return _result(
-        "game-vi", v, arg, arg, res, tol_, its, sweeps, ok, hist, rows.discount, t0,
+        "game-vi", v, arg, arg, res, tol_, its, sweeps, ok, hist, modulus(rows), t0,
         raise_on_failure,
     )  # fmt: skip
 
@@ -985,7 +1046,7 @@ def _evaluate_rows(
     return PolicyEvaluation(
         values=v,
         residual=res,
-        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), lam),
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), modulus(rows)),
         method=method,
         sweeps=sweeps,
         seconds=time.perf_counter() - t0,
@@ -1000,9 +1061,10 @@ def _evaluate_iterative(
 
     The Porteus shift is carried as a scalar offset as in :func:`_iterate`: the iterate
     is ``u + c``; ``T_pi(u + c) - (u + c) = (T_pi u - u) - (1 - lambda) c``. ``sel`` is
-    rows (BellmanRows) or actions (PostDecisionRows).
+    rows (BellmanRows) or actions (PostDecisionRows); :class:`PorteusShift` for rows that
+    are not stochastic.
     """
-    lam = ops.discount
+    shift = PorteusShift(ops.discount, ops.row_sums())
     nchunks = ops._chunks()
     u = np.zeros(ops.n_vars)
     buf = np.empty_like(u)
@@ -1012,11 +1074,11 @@ def _evaluate_iterative(
     while True:
         lo, hi = ops._sweep_policy(sel, u, buf, nchunks, **kw)
         sweeps += 1
-        lo, hi, c_next = _offset_step(lam, c, lo, hi, True)
-        if max(-lo, hi) <= tol or sweeps >= max_sweeps:
+        res, c_next = shift.step(c, lo, hi, True)
+        if res <= tol or sweeps >= max_sweeps:
             return u + c, sweeps
-        c = c_next
         u, buf = buf, u
+        c = shift.settle(u, c_next)
 
 
 def _evaluate_post_decision(
@@ -1035,7 +1097,7 @@ def _evaluate_post_decision(
     return PolicyEvaluation(
         values=v,
         residual=res,
-        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), ps.discount),
+        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), modulus(ps)),
         method="iterative",
         sweeps=sweeps,
         seconds=time.perf_counter() - t0,
@@ -1113,12 +1175,46 @@ def bellman_residual(model: Model, values: Any) -> float:
     return float(np.abs(tv - v).max())
 
 
+class _PorteusTail:
+    """``sum_{k>=1} a (lambda s)^k = a lambda s / (1 - lambda s)`` rounded the safe way.
+
+    ``s`` is the end of the rows' certified sums ``[lo, hi]`` that makes the tail weakest
+    (see :class:`PorteusBounds`), each factor rounded away from the bound's side by a few
+    ulps, so the result is a lower (upper) bound on the exact tail in floating point.
+    """
+
+    def __init__(self, discount: float, sums: RowSums) -> None:
+        e = float(np.finfo(np.float64).eps)
+        k_small = discount * sums.lo * (1.0 - 2.0 * e)  # kappa rounded down / up
+        k_big = min(discount * sums.hi * (1.0 + 2.0 * e), 1.0)
+        self.f_small = k_small / (1.0 - k_small) * (1.0 - 4.0 * e)  # lambda s / (1 - lambda s)
+        self.f_big = k_big / ((1.0 - k_big) * (1.0 - 2.0 * e)) * (1.0 + 4.0 * e)
+        self.g_small = 1.0 / (1.0 - k_small) * (1.0 - 4.0 * e)  # 1 / (1 - lambda s)
+        self.g_big = 1.0 / ((1.0 - k_big) * (1.0 - 2.0 * e)) * (1.0 + 4.0 * e)
+        self.e = e
+
+    def lower(self, a: float, paper: bool = False) -> float:
+        """A value at most the exact tail of ``a`` (``a / (1 - lambda s)`` with ``paper``)."""
+        f = (
+            (self.g_small if a >= 0 else self.g_big)
+            if paper
+            else (self.f_small if a >= 0 else self.f_big)
+        )
+        t = a * f
+        return t - abs(t) * 2.0 * self.e
+
+    def upper(self, a: float) -> float:
+        """A value at least the exact tail of ``a``."""
+        t = a * (self.f_big if a >= 0 else self.f_small)
+        return t + abs(t) * 2.0 * self.e
+
+
 def porteus_bounds(model: Model, values: Any) -> PorteusBounds:
     """The Porteus bounds of :class:`PorteusBounds` for a candidate ``V`` (finite, else
     :class:`~lpbounds.errors.ValidationError`)."""
     rows = exact_rows(model)
     v = check_vector("values", values, rows.n_vars)
-    lam = rows.discount
+    sums = rows.row_sums()
     sel, tv = _greedy_rows(rows, v, GREEDY_TIE_RTOL)
     # the lower bounds use the chosen policy's own Q-values, so a tie within
     # GREEDY_TIE_RTOL cannot make them invalid
@@ -1126,10 +1222,17 @@ def porteus_bounds(model: Model, values: Any) -> PorteusBounds:
     alpha = tpi - v
     a_lo = float(alpha.min())
     a_hi = float((tv - v).max())
+    kappa = sums.modulus(rows.discount)
+    m = bellman_margin(
+        rows.n_outcomes, float(np.abs(rows.reward).max(initial=0.0)), kappa,
+        float(np.abs(v).max(initial=0.0)), float(np.abs(tv).max(initial=0.0)),
+    )  # fmt: skip
+    tail = _PorteusTail(rows.discount, sums)
+    down, up = -np.inf, np.inf
     return PorteusBounds(
-        lower=tpi + lam / (1 - lam) * a_lo,
-        lower_paper=v + a_lo / (1 - lam),
-        upper=tv + lam / (1 - lam) * a_hi,
+        lower=np.nextafter(tpi - m + tail.lower(a_lo - m), down),
+        lower_paper=np.nextafter(v + tail.lower(a_lo - m, paper=True), down),
+        upper=np.nextafter(tv + m + tail.upper(a_hi + m), up),
         policy=_policy_out(model, rows, sel),
         alpha_min=a_lo,
         alpha_max=a_hi,

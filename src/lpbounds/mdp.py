@@ -23,7 +23,7 @@ import scipy.sparse as sp
 
 from . import interop
 from .errors import ValidationError
-from .tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
+from .stochastic import check_effective_discount, check_rows
 from .validation import (
     as_array,
     as_float_array,
@@ -83,7 +83,10 @@ class FiniteMDP:
     probabilities : array_like of float, shape (L,) or (n, A, L)
         ``p_l``, shared by every pair, or one distribution per (state, action).
         Each allowed pair's probabilities must be non-negative and sum to one within
-        :data:`~lpbounds.tolerances.PROBABILITY_SUM_ATOL`.
+        :data:`~lpbounds.tolerances.PROBABILITY_SUM_ATOL` (the rule of
+        :func:`lpbounds.stochastic.check_rows`, shared with ``BellmanRows``). They are
+        stored as given, not renormalised: every error bound and certificate holds for
+        the rows as stored (:class:`lpbounds.stochastic.RowSums`).
     rewards : array_like of float, shape (n, A)
         ``R_u(x)``; must be finite on allowed pairs (other entries are ignored).
     discount : float
@@ -115,9 +118,10 @@ class FiniteMDP:
     ------
     ValidationError
         Naming the first offending entry (shape, dtype, index, probability, reward,
-        discount). Booleans, strings and complex numbers are refused before any cast;
-        successor indices are range-checked in the dtype given, before the cast to the
-        index dtype. A model whose value scale ``max|R| / (1 - discount)`` exceeds
+        discount), or an effective discount ``discount * max row sum`` that is not below
+        1 (no discounted value exists). Booleans, strings and complex numbers are refused
+        before any cast; successor indices are range-checked in the dtype given, before
+        the cast to the index dtype. A model whose value scale ``max|R| / (1 - discount)`` exceeds
         :data:`~lpbounds.validation.MAX_VALUE_SCALE` (1e300) is refused: its values
         would overflow float64 in DP and in the LPs' certificates.
 
@@ -159,7 +163,8 @@ class FiniteMDP:
             rew = np.negative(rew) + 0.0
         check_value_scale(max(float(rew.max()), -float(rew.min())), self.discount)
 
-        self.probabilities = _readonly(self._check_probabilities(probabilities, allow, succ.shape))
+        probs = self._check_probabilities(probabilities, allow, succ.shape, self.discount)
+        self.probabilities = _readonly(probs)
         self.successors = _readonly(succ)
         self.rewards = _readonly(rew)
         self.allowed = _readonly(allow.copy())
@@ -302,23 +307,17 @@ class FiniteMDP:
 
     @staticmethod
     def _check_probabilities(
-        probabilities: Any, allow: np.ndarray, shape: tuple[int, int, int]
+        probabilities: Any, allow: np.ndarray, shape: tuple[int, int, int], discount: float
     ) -> np.ndarray:
+        """The shared row-sum rule (:func:`lpbounds.stochastic.check_rows`) on the allowed
+        pairs, and the effective discount ``lambda * max row sum`` below 1."""
         p = as_float_array("probabilities", probabilities, finite=False)
         _n, _n_actions, n_out = shape
         if p.shape == (n_out,):
-            where = "probabilities"
             if not np.all(np.isfinite(p)):
                 raise ValidationError(f"probabilities must be finite; got {p}")
-            if (p < -PROBABILITY_NEGATIVE_ATOL).any():
-                ll = int(np.flatnonzero(p < -PROBABILITY_NEGATIVE_ATOL)[0])
-                raise ValidationError(f"{where}[{ll}] = {p[ll]} is negative")
-            total = p.sum()
-            if abs(total - 1.0) > PROBABILITY_SUM_ATOL:
-                raise ValidationError(
-                    f"{where} sum to {float(total):.12g}, not 1 "
-                    f"(tolerance {PROBABILITY_SUM_ATOL:g})"
-                )
+            check_rows("probabilities", p)
+            check_effective_discount("probabilities", p, discount)
             return np.clip(p, 0.0, None)
         if p.shape != shape:
             raise ValidationError(
@@ -328,21 +327,8 @@ class FiniteMDP:
         if nonfinite.any():
             x, u, ll = first_index(nonfinite)
             raise ValidationError(f"probabilities[{x}, {u}, {ll}] = {p[x, u, ll]} is not finite")
-        neg = (p < -PROBABILITY_NEGATIVE_ATOL) & allow[:, :, None]
-        if neg.any():
-            x, u, ll = first_index(neg)
-            raise ValidationError(
-                f"probabilities[{x}, {u}, {ll}] = {p[x, u, ll]} is negative "
-                f"({int(neg.sum())} such entries)"
-            )
-        sums = p.sum(axis=2)
-        off = (np.abs(sums - 1.0) > PROBABILITY_SUM_ATOL) & allow
-        if off.any():
-            x, u = first_index(off)
-            raise ValidationError(
-                f"probabilities[{x}, {u}, :] sum to {float(sums[x, u]):.12g}, not 1 "
-                f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(off.sum())} such pairs)"
-            )
+        check_rows("probabilities", p, where=allow)
+        check_effective_discount("probabilities", p, discount, where=allow)
         p = np.clip(p, 0.0, None)
         p[~allow] = 0.0
         p[~allow, 0] = 1.0

@@ -79,6 +79,7 @@ from . import _backend
 from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
+from .stochastic import RowSums, check_effective_discount, check_rows, row_sums
 from .validation import (
     as_float_array,
     check_array,
@@ -170,8 +171,12 @@ class BellmanRows:
         check_indices("owner", owner, n_vars)
         check_indices("targets", targets, n_vars)
         check_indices("action", action, np.iinfo(np.int32).max)
-        if (probs < 0).any() or np.abs(probs.sum(axis=1) - 1).max(initial=0) > 1e-9:
-            raise ValidationError("each row's probabilities must be >= 0 and sum to 1")
+        if not np.all(np.isfinite(probs)):
+            raise ValidationError("probs must be finite")
+        check_rows("probs", probs)  # the rule FiniteMDP applies (lpbounds.stochastic)
+        check_effective_discount("probs", probs, lam)
+        if (probs < 0).any():
+            probs = np.clip(probs, 0.0, None)
         check_value_scale(float(np.abs(reward).max(initial=0.0)), lam, "reward")
         order = np.lexsort((action, owner))
         idt = index_dtype(n_vars)
@@ -393,6 +398,12 @@ class BellmanRows:
         )
 
     # ------------------------------------------------------------------ operators
+    def row_sums(self) -> RowSums:
+        """Certified bounds on the exact sums of the rows' probabilities
+        (:class:`lpbounds.stochastic.RowSums`): the contraction modulus of every operator
+        of these rows is ``row_sums().modulus(discount)``."""
+        return row_sums(self.probs)
+
     def _vec(self, v: Any, name: str = "v") -> np.ndarray:
         """``v`` as a float64 vector of length ``n_vars`` (dtype checked before the cast;
         finiteness is the caller's check, done once at its boundary)."""
@@ -733,6 +744,10 @@ class PostDecisionRows:
         """Evaluation sweeps of one policy at a time (in place: a sweep reads one ``W`` per
         state, nothing to pack)."""
         return PolicySweeps(self, nchunks, w=w)
+
+    def row_sums(self) -> RowSums:
+        """Certified bounds on the exact sum of the shared distribution ``probs``."""
+        return row_sums(self.probs)
 
     def new_work(self) -> np.ndarray:
         """A buffer for ``W`` to pass to the sweeps: one per solve, reused by its sweeps (a

@@ -47,6 +47,17 @@ LP_COMPARE_RTOL: float = 1e-6
 EXPORT_DP_RTOL: float = 1e-12
 
 
+#: Rows whose exact sums are certified within this of 1 (``RowSums.delta``) are treated
+#: as stochastic by the exact DP's Porteus offset, which is then carried as a scalar
+#: (``T(u + c) = T u + lambda c``); its error ``lambda |c| delta`` is added to the reported
+#: residual. With ``|c| <= max|R| / (1 - lambda)`` that is at most 1e-12 of the value scale,
+#: 1 % of the default tolerance ``DP_RTOL``. Rows normalised in floating point sum to 1
+#: within ``(L - 1) eps`` and are certified within about ``2 (L + 1) eps`` (2.7e-15 for
+#: L = 5); rows summing to ``1 +- 1e-9`` (accepted, PROBABILITY_SUM_ATOL) are not, and the
+#: DP folds the offset into the iterate every sweep instead (dp.PorteusShift).
+DP_OFFSET_ROWSUM_ATOL: float = 1e-12
+
+
 def dp_scale(rewards_absmax: float, discount: float) -> float:
     """Scale of the value function, ``max|R| / (1 - discount)`` (at least 1e-300)."""
     return max(float(rewards_absmax) / (1.0 - float(discount)), 1e-300)
@@ -104,9 +115,15 @@ NLP_MILP_GAP_RTOL: float = 1e-10
 ROUNDING_ULPS: float = 8.0
 
 
-def error_bound(residual: float, values_absmax: float, discount: float) -> float:
-    """Bound on ``||V - V*||``: ``(residual + ROUNDING_ULPS eps max(1, max|V|)) / (1 - lambda)``."""
+def error_bound(residual: float, values_absmax: float, modulus: float) -> float:
+    """Bound on ``||V - V*||``: ``(residual + ROUNDING_ULPS eps max(1, max|V|)) / (1 - kappa)``.
+
+    ``modulus`` is the contraction modulus ``kappa = lambda max_r s_r`` of the rows
+    (``RowSums.modulus``, ``lpbounds.dp.modulus``), not the discount: with rows summing
+    to ``1 + 9e-10`` at discount 0.99999 the discount alone understates the bound 10^4-fold.
+    """
     import numpy as np
 
     slack = ROUNDING_ULPS * float(np.finfo(np.float64).eps) * max(1.0, float(values_absmax))
-    return (float(residual) + slack) / (1.0 - float(discount))
+    return (float(residual) + slack) / (1.0 - float(modulus))
+

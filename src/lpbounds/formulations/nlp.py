@@ -312,7 +312,8 @@ class NLP:
     disj_owner, disj_action, disj_size : ndarray (D,)
     cost : ndarray (M,)
     box : (float, float)
-        ``(min rho / (1 - lambda), max rho / (1 - lambda))``: contains ``w*``.
+        ``(min rho / (1 - lambda s), max rho / (1 - lambda s))``, each the extreme over the
+        rows' certified sums ``s`` (1 when stochastic), widened by a few ulps: contains ``w*``.
     problem : cvxpy.Problem
         Eq. 25 as a cvxpy mixed-integer problem (the big-M MILP of :attr:`milp`, an
         :class:`NLPMILP` with variables ``w`` and ``z`` and constraint groups ``single``,
@@ -352,8 +353,13 @@ class NLP:
         self.disj_size = np.diff(self.disj_start)
         self.disj_of_row = np.repeat(np.arange(first.size), self.disj_size)
         lam = r.discount
-        # widened by a few ulps so that rounding in the division cannot exclude w*
-        lo, hi = float(r.reward.min()) / (1 - lam), float(r.reward.max()) / (1 - lam)
+        # w* solves w = rho + lambda s w' row by row with s in the rows' certified sums
+        # [s_lo, s_hi] (1 for stochastic rows): the extreme of rho / (1 - lambda s) over
+        # both ends bounds it; widened by a few ulps so that rounding cannot exclude w*
+        sums = r.row_sums()
+        ends = [1 - lam * sums.lo, 1 - lam * sums.hi]
+        rmin, rmax = float(r.reward.min()), float(r.reward.max())
+        lo, hi = min(rmin / d for d in ends), max(rmax / d for d in ends)
         pad = 8 * np.finfo(np.float64).eps
         self.box = (lo - pad * abs(lo) - _TINY, hi + pad * abs(hi) + _TINY)
         self.scale = dp_scale(float(np.abs(r.reward).max(initial=0.0)), lam)
@@ -490,13 +496,15 @@ class NLP:
         return v, float(np.abs(sub.apply_max(v)[0] - v).max())
 
     def strategy_upper_bound(self, sel: np.ndarray) -> tuple[np.ndarray, float]:
-        """``(v_sigma, c'v_sigma + sum(c) residual / (1 - lambda))``: a certified upper bound.
+        """``(v_sigma, c'v_sigma + sum(c) residual / (1 - kappa))``: a certified upper bound.
 
-        ``v + residual / (1 - lambda)`` satisfies the strategy's rows, hence the NLP's.
+        ``v + residual / (1 - kappa)`` satisfies the strategy's rows, hence the NLP's
+        (``kappa = lambda max_r s_r``, the rows' contraction modulus: ``q_r(v + t) =
+        q_r(v) + lambda s_r t``).
         """
         v, res = self.strategy_value(sel)
-        lam = self.rows.discount
-        return v, float(self.cost @ v + self.cost.sum() * res / (1 - lam))
+        kappa = self.rows.row_sums().modulus(self.rows.discount)
+        return v, float(self.cost @ v + self.cost.sum() * res / (1 - kappa))
 
     # ------------------------------------------------------------------ solve
     def solve(
@@ -649,12 +657,12 @@ class NLP:
         t0 = time.perf_counter()
         log: list[NLPIteration] = []
         s = float(self.cost.sum())
-        lam = self.rows.discount
+        kappa = self.rows.row_sums().modulus(self.rows.discount)
 
         def cb(it: int, res: float) -> None:
-            # the residual alone bounds the bracket's width: 2 sum(c) res / (1 - lambda)
+            # the residual alone bounds the bracket's width: 2 sum(c) res / (1 - kappa)
             e = NLPIteration(
-                it, np.nan, np.nan, 2 * s * res / (1 - lam), 0, time.perf_counter() - t0
+                it, np.nan, np.nan, 2 * s * res / (1 - kappa), 0, time.perf_counter() - t0
             )
             log.append(e)
             tick(e)

@@ -521,7 +521,7 @@ def _recertify(mf: MatrixFreePatrol, vstar: np.ndarray, vs: dict[str, Any]) -> d
     return {
         **vs,
         "residual": res,
-        "error_bound": error_bound(res, vmax, mf.discount),
+        "error_bound": error_bound(res, vmax, mf.modulus()),
         "status": str(Status.OPTIMAL if ok else Status.INACCURATE),
     }
 

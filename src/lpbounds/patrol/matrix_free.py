@@ -22,7 +22,7 @@ Every Q-value is computed with the array path's arithmetic, in its order:
 the maximum keeps the first maximising action; a sweep returns the extremes of
 ``T v - v``. :func:`solve_vstar` runs the iteration of :func:`lpbounds.solve_exact`
 (MPI with the same ``eval_sweeps`` rule, the Porteus shift carried as a scalar offset through
-:func:`lpbounds.dp._offset_step`, the default tolerance ``DP_RTOL max|R| / (1 -
+:class:`lpbounds.dp.PorteusShift`, the default tolerance ``DP_RTOL max|R| / (1 -
 lambda)``), and :func:`evaluate_policy` that of :func:`lpbounds.evaluate_policy`'s
 iterative method, so both return the array path's vectors bit for bit
 (``tests/patrol/test_matrix_free.py`` checks it; ``benchmarks/bench_beyond.py`` on the
@@ -51,14 +51,15 @@ from numba import njit, prange
 
 from ..dp import (
     PolicyEvaluation,
+    PorteusShift,
     _check_eval_sweeps,
     _EvalPlan,
-    _offset_step,
     _ThreadChoice,
     _threads_for,
 )
 from ..errors import ConvergenceError, ValidationError
 from ..status import Status
+from ..stochastic import RowSums, row_sums
 from ..tolerances import DP_RTOL, dp_scale, error_bound
 from ..validation import check_int
 from .model import PatrolModel, _decode_kernel, _successor_kernel
@@ -715,6 +716,14 @@ class MatrixFreePatrol:
             )
         return self._reward_absmax
 
+    def row_sums(self) -> RowSums:
+        """Certified bounds on the exact sum of the alert distribution ``p_l``."""
+        return row_sums(self._probs)
+
+    def modulus(self) -> float:
+        """The contraction modulus ``lambda sum_l p_l`` (rounded up) of the error bounds."""
+        return self.row_sums().modulus(self.discount)
+
     def default_tol(self) -> float:
         """:func:`lpbounds.solve_exact`'s default: ``DP_RTOL max|R| / (1 - lambda)``."""
         return DP_RTOL * dp_scale(self.reward_absmax, self.discount)
@@ -892,7 +901,7 @@ def solve_vstar(
         values=u,
         policy=arg,
         residual=res,
-        error_bound=error_bound(res, vmax, mf.discount),
+        error_bound=error_bound(res, vmax, mf.modulus()),
         tol=tol_,
         iterations=its,
         sweeps=sweeps,
@@ -911,7 +920,7 @@ def _mpi(
 ) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
     """:func:`lpbounds.dp._iterate`'s loop (MPI, Porteus shift as a scalar offset) in two
     vectors: the result is formed in place."""
-    lam = mf.discount
+    shift = PorteusShift(mf.discount, mf.row_sums())
     u = np.zeros(mf.n_vars)
     buf = mf.new_vector()
     arg = np.zeros(mf.n_vars, dtype=np.int8)
@@ -921,8 +930,7 @@ def _mpi(
     for it in range(max_iter + 1):
         lo, hi = mf.sweep_max(u, buf, arg)
         sweeps += 1
-        lo, hi, c_next = _offset_step(lam, c, lo, hi, True)
-        res = max(-lo, hi)
+        res, c_next = shift.step(c, lo, hi, True)
         hist.append(res)
         if callback is not None:
             callback(it, res)
@@ -931,13 +939,14 @@ def _mpi(
             break
         if it == max_iter:
             break
-        c = c_next
         u, buf = buf, u
+        c = shift.settle(u, c_next)
         for _ in range(plan.count(arg)):
             lo, hi = mf.sweep_policy(arg, u, buf)
             sweeps += 1
-            _, _, c = _offset_step(lam, c, lo, hi, True)
+            _, c_next = shift.step(c, lo, hi, True)
             u, buf = buf, u
+            c = shift.settle(u, c_next)
     del buf
     u += c  # the array path's u + c, in place
     return u, arg, res, its, sweeps, ok, hist
@@ -976,7 +985,7 @@ def evaluate_policy(
     return PolicyEvaluation(
         values=u,
         residual=res,
-        error_bound=error_bound(res, vmax, mf.discount),
+        error_bound=error_bound(res, vmax, mf.modulus()),
         method="iterative (matrix-free)",
         sweeps=sweeps,
         seconds=time.perf_counter() - t0,
@@ -992,20 +1001,20 @@ def _evaluate(
 ) -> tuple[np.ndarray, float, int]:
     """:func:`lpbounds.dp._evaluate_iterative`'s loop in two vectors, and the residual
     measured by one more sweep on the returned vector."""
-    lam = mf.discount
+    shift = PorteusShift(mf.discount, mf.row_sums())
     u = np.zeros(mf.n_vars)
     buf = mf.new_vector()
     c, sweeps = 0.0, 0
     while True:
         lo, hi = mf.sweep_policy(act, u, buf)
         sweeps += 1
-        lo, hi, c_next = _offset_step(lam, c, lo, hi, True)
+        res, c_next = shift.step(c, lo, hi, True)
         if callback is not None:
-            callback(sweeps, max(-lo, hi))
-        if max(-lo, hi) <= tol or sweeps >= max_sweeps:
+            callback(sweeps, res)
+        if res <= tol or sweeps >= max_sweeps:
             break
-        c = c_next
         u, buf = buf, u
+        c = shift.settle(u, c_next)
     u += c
     lo, hi = mf.sweep_policy(act, u, buf)  # measured on the returned vector
     return u, max(-lo, hi), sweeps

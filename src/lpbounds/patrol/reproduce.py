@@ -260,12 +260,13 @@ def general_bound_residuals(
     the RLP optimum (eq. 9, Fact 1) and ``G-bar w (i) = max_u min_{x in S_i} q(x, u; Phi w)``
     the one of the NLP (eq. 25, Fact 2), with
     ``q(x, u; V) = R_u(x) + lambda sum_l p_l V(f(x, u, Y_l))``. Both are
-    ``lambda``-contractions, so ``||v_up - v_RLP||_inf <= ||T-bar v_up - v_up|| / (1 - lambda)``
+    ``kappa``-contractions (``kappa = lambda max_r s_r``), so
+    ``||v_up - v_RLP||_inf <= ||T-bar v_up - v_up|| / (1 - kappa)``
     and likewise for the NLP.
     """
     rows = exact_rows(mdp)
     n, n_act = mdp.allowed.shape
-    lam = mdp.discount
+    kappa = rows.row_sums().modulus(mdp.discount)  # lambda, up to the rows' sums
     out: dict[str, float] = {}
     order = np.argsort(labels, kind="stable")
     sizes = np.bincount(labels, minlength=n_partitions)
@@ -284,7 +285,7 @@ def general_bound_residuals(
             tv = mins.max(axis=1)
         res = float(np.abs(tv - vec).max())
         out[f"{name}_residual"] = res
-        out[f"{name}_distance_bound"] = res / (1.0 - lam)
+        out[f"{name}_distance_bound"] = res / (1.0 - kappa)
     return out
 
 
