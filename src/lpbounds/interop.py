@@ -16,11 +16,19 @@ converter:
   with as many actions as states needs ``layout="sas"`` (``Q[s, a, s']``, QuantEcon and
   MDPSolver) or ``layout="ass"`` (``P[a, s, s']``, pymdptoolbox);
 * ``terminal=True`` adds one absorbing state with reward 0 (the *sink*, the last state)
-  and sends to it the probability missing from every row that sums to less than one;
-  ``terminal=[states]`` also ends the process after the listed states (every action of
-  a listed state moves to the sink after its reward). Without ``terminal`` such rows are
-  refused. The sink's value is 0 under every policy; :meth:`FiniteMDP.user_values
+  and sends to it the probability missing from every row that sums to less than one
+  (but more than zero); ``terminal=[states]`` also ends the process after the listed
+  states (every action of a listed state moves to the sink; ``terminal_reward="keep"``,
+  the default, lets it pay its reward first, ``"zero"`` makes the listed states worth 0,
+  Gymnasium's and POMDPs.jl's convention). Without ``terminal`` such rows are refused.
+  The sink's value is 0 under every policy; :meth:`FiniteMDP.user_values
   <lpbounds.mdp.FiniteMDP.user_values>` drops it from reported vectors;
+* a pair that is available (allowed, given a finite reward or a reward entry) but has
+  no transition at all (an empty row, or no ``[s, a, s', p]`` row) is refused, naming
+  the pair, unless its state is listed in ``terminal=``: it is never silently dropped
+  (with its reward) nor silently sent to the sink. Mark a pair that is not available
+  (``allowed=`` False, a reward of ``-inf``), or send a pair that ends the process to a
+  state listed in ``terminal=``;
 * ``sense="min"``: the rewards are costs to minimise; they are stored negated (the model
   is the reward-maximising problem of the negated costs) and the ``user_*`` helpers of
   :class:`~lpbounds.mdp.FiniteMDP` translate values and bounds back.
@@ -58,6 +66,8 @@ __all__ = [
 ]
 
 LAYOUTS = ("sas", "ass")
+#: ``terminal_reward=``: what a state listed in ``terminal=`` pays before the sink
+TERMINAL_REWARDS = ("keep", "zero")
 _TERMINAL_HINT = (
     "pass terminal=True to send the missing probability to an absorbing end state "
     "(value 0), or fix the row"
@@ -95,6 +105,50 @@ def _terminal_states(terminal: Any, n: int) -> tuple[bool, np.ndarray]:
     return True, np.unique(idx.astype(np.int64))
 
 
+def _check_terminal_reward(terminal_reward: Any, terminal: Any) -> str:
+    """``terminal_reward`` checked: ``"zero"`` needs states listed in ``terminal=``."""
+    value = check_choice("terminal_reward", terminal_reward, TERMINAL_REWARDS)
+    if value == "zero" and (terminal is None or terminal is False or terminal is True):
+        raise ValidationError(
+            f"terminal_reward='zero' applies to the states listed in terminal= (state "
+            f"indices or a mask); terminal={terminal!r} lists none"
+            + (" (its sink is worth 0 already)" if terminal is True else "")
+        )
+    return value
+
+
+def _no_transition_hint(x: int, unavailable: str) -> str:
+    """How to fix an available pair of state ``x`` without any transition."""
+    return (
+        "give its transitions; if taking it ends the process, send it to a state listed "
+        "in terminal= (with terminal_reward='zero' the listed states are worth 0, as after "
+        f"a terminated transition in Gymnasium), or list state {x} itself in terminal= "
+        f"(every action of it then pays its reward and ends); if it is not available, "
+        f"{unavailable}"
+    )
+
+
+def _check_nonempty(
+    q: sp.csr_matrix,
+    pairs: tuple[np.ndarray, np.ndarray],
+    ends: np.ndarray,
+    row_name: Callable[[int], str],
+    unavailable: Callable[[int], str],
+) -> None:
+    """Refuse a pair with no transition (no positive entry) outside the terminal states."""
+    rows = np.repeat(np.arange(q.shape[0]), np.diff(q.indptr))
+    positive = np.bincount(rows[q.data > 0], minlength=q.shape[0])
+    empty = (positive == 0) & ~ends
+    if empty.any():
+        k = int(np.flatnonzero(empty)[0])
+        x, u = int(pairs[0][k]), int(pairs[1][k])
+        raise ValidationError(
+            f"{row_name(k)}: the pair (state {x}, action {u}) has no transition (no "
+            f"probability on any next state; {int(empty.sum())} such pairs): "
+            f"{_no_transition_hint(x, unavailable(k))}"
+        )
+
+
 def _check_rows(
     q: sp.csr_matrix,
     pairs: tuple[np.ndarray, np.ndarray],
@@ -130,7 +184,9 @@ def model_from_pairs(
     discount: float,
     *,
     row_name: Callable[[int], str],
+    unavailable: Callable[[int], str],
     terminal: Any = None,
+    terminal_reward: str = "keep",
     sense: str = "max",
     action_names: Any = None,
 ) -> FiniteMDP:
@@ -151,11 +207,15 @@ def model_from_pairs(
     discount : float
     row_name : callable
         ``row_name(k)``: how the user's input names row ``k`` (for messages).
-    terminal, sense, action_names
+    unavailable : callable
+        ``unavailable(k)``: how the user's input marks pair ``k`` not available (for the
+        message refusing a pair without any transition outside the terminal states).
+    terminal, terminal_reward, sense, action_names
         See the module docstring and :class:`~lpbounds.mdp.FiniteMDP`.
     """
     n, m = shape
     sink, term = _terminal_states(terminal, n)
+    terminal_reward = _check_terminal_reward(terminal_reward, terminal)
     _check_coverage(s, term, shape)
     _check_raw_entries(q, row_name)
     q = sp.csr_matrix(q, dtype=np.float64)
@@ -163,10 +223,13 @@ def model_from_pairs(
     q.eliminate_zeros()
     q.sort_indices()
     ends = np.isin(s, term) if term.size else np.zeros(s.size, dtype=bool)
+    _check_nonempty(q, (s, a), ends, row_name, unavailable)
     if ends.any():  # a terminal state's actions all move to the sink after their reward
         keep = np.repeat(~ends, np.diff(q.indptr)).astype(np.float64)
         q = sp.csr_matrix((q.data * keep, q.indices, q.indptr), shape=q.shape)
         q.eliminate_zeros()
+        if terminal_reward == "zero":  # ... which is 0: the listed states are worth 0
+            r = np.where(ends, 0.0, r)
     # a terminal state without any action gets action 0 (reward 0)
     extra = term[~np.isin(term, s)] if term.size else term
     if extra.size:
@@ -430,12 +493,28 @@ def from_matrices(
     *,
     allowed: Any = None,
     terminal: Any = None,
+    terminal_reward: str = "keep",
     sense: str = "max",
     action_names: Any = None,
 ) -> FiniteMDP:
-    """The converter of :meth:`FiniteMDP.from_matrices` (pymdptoolbox's convention)."""
+    """The converter of :meth:`FiniteMDP.from_matrices` (pymdptoolbox's convention).
+
+    Every pair of ``allowed`` (default: all) is available. Its row of ``P`` must sum to
+    one; with ``terminal=`` a row summing to less (but to more than 0) sends the rest to
+    the sink. An allowed pair whose row is empty (all zeros) is refused, naming the pair,
+    unless its state is listed in ``terminal=``: mark it ``allowed[x, a] = False`` if it
+    is not available.
+
+    ``terminal_reward`` : {"keep", "zero"}
+        What a state listed in ``terminal=`` pays: ``"keep"`` (default) each of its
+        allowed actions pays ``R[x, a]`` once and moves to the sink (its value is the
+        best of them); ``"zero"`` its rewards are replaced by 0 (it is worth 0, as a state
+        reached by a terminated transition in Gymnasium or a POMDPs.jl terminal state).
+        Either way its rows of ``P`` are discarded. ``"zero"`` needs listed states.
+    """
     discount = _check_discount(discount)
     sense = check_choice("sense", sense, ("max", "min"))
+    terminal_reward = _check_terminal_reward(terminal_reward, terminal)
     mats = matrix_list(P, "P")
     n_actions, n = len(mats), mats[0].shape[0]
     if n == 0:
@@ -444,14 +523,17 @@ def from_matrices(
         if m.shape != (n, n):
             raise ValidationError(f"P[{a}] has shape {m.shape}; expected {(n, n)}{_layout_hint(P)}")
     allow = cls._check_allowed(allowed, n, n_actions)
-    if terminal is None:
-        nnz = np.stack([np.diff(m.indptr) for m in mats], axis=1)  # (n, A)
-        empty = (nnz == 0) & allow
-        if empty.any():
-            x, a = first_index(empty)
-            raise ValidationError(
-                f"row {x} of P[{a}] is empty (sums to 0, not 1): {_TERMINAL_HINT}"
-            )
+    _, term = _terminal_states(terminal, n)
+    nnz = np.stack([np.diff(m.indptr) for m in mats], axis=1)  # (n, A); zeros eliminated
+    empty = (nnz == 0) & allow
+    empty[term] = False  # a listed state's rows are discarded
+    if empty.any():
+        x, a = first_index(empty)
+        raise ValidationError(
+            f"row {x} of P[{a}] is empty (sums to 0, not 1): the pair (state {x}, action "
+            f"{a}) is allowed but has no transition ({int(empty.sum())} such pairs): "
+            + _no_transition_hint(x, f"pass allowed[{x}, {a}] = False (from_matrices)")
+        )
     rew = expected_rewards(R, mats, allow)
     x_idx, a_idx = np.nonzero(allow)
     stacked = sp.vstack(mats, format="csr")
@@ -459,7 +541,11 @@ def from_matrices(
     return model_from_pairs(
         cls, q, x_idx, a_idx, rew[x_idx, a_idx], (n, n_actions), discount,
         row_name=lambda k: f"row {int(x_idx[k])} of P[{int(a_idx[k])}]",
-        terminal=terminal, sense=sense, action_names=action_names,
+        unavailable=lambda k: (
+            f"pass allowed[{int(x_idx[k])}, {int(a_idx[k])}] = False (from_matrices)"
+        ),
+        terminal=terminal, terminal_reward=terminal_reward, sense=sense,
+        action_names=action_names,
     )  # fmt: skip
 
 
@@ -515,6 +601,7 @@ def _quantecon_product(
     beta: float,
     layout: Any,
     terminal: Any,
+    terminal_reward: str,
     action_names: Any,
 ) -> FiniteMDP:
     rew, avail = _quantecon_rewards(R)
@@ -539,7 +626,8 @@ def _quantecon_product(
             f"{lab}[{x_idx[k]}, {a_idx[k]}, :]" if order == "sas"
             else f"{lab}[{a_idx[k]}, {x_idx[k]}, :]"
         ),
-        terminal=terminal, action_names=action_names,
+        unavailable=lambda k: f"set R[{x_idx[k]}, {a_idx[k]}] = -inf (QuantEcon's mark)",
+        terminal=terminal, terminal_reward=terminal_reward, action_names=action_names,
     )  # fmt: skip
 
 
@@ -582,6 +670,7 @@ def _quantecon_sa(
     s_indices: Any,
     a_indices: Any,
     terminal: Any,
+    terminal_reward: str,
     action_names: Any,
 ) -> FiniteMDP:
     if sp.issparse(Q):
@@ -607,7 +696,11 @@ def _quantecon_sa(
     return model_from_pairs(
         cls, q[keep], s[keep], a[keep], rew[keep], (n, m), beta,
         row_name=lambda k: f"Q[{keep[k]}, :] (state {s[keep[k]]}, action {a[keep[k]]})",
-        terminal=terminal, action_names=action_names,
+        unavailable=lambda k: (
+            f"set R[{keep[k]}] = -inf (QuantEcon's mark) or leave the pair out of "
+            "s_indices/a_indices"
+        ),
+        terminal=terminal, terminal_reward=terminal_reward, action_names=action_names,
     )  # fmt: skip
 
 
@@ -621,18 +714,37 @@ def from_quantecon(
     *,
     layout: str | None = None,
     terminal: Any = None,
+    terminal_reward: str = "keep",
     action_names: Any = None,
 ) -> FiniteMDP:
-    """The converter of :meth:`FiniteMDP.from_quantecon`."""
+    """The converter of :meth:`FiniteMDP.from_quantecon`.
+
+    A pair is available when its reward is not ``-inf`` (product form) or when it is
+    listed in ``s_indices``/``a_indices`` with a reward other than ``-inf``. An available
+    pair whose row of ``Q`` is all zeros is refused, naming the pair, unless its state is
+    listed in ``terminal=`` (QuantEcon itself would read it as a pair that leaves the
+    model: mark a pair that is not available with ``-inf``).
+
+    ``terminal_reward`` : {"keep", "zero"}
+        What a state listed in ``terminal=`` pays: ``"keep"`` (default) each of its
+        available actions pays its reward once and moves to the sink; ``"zero"`` its
+        rewards are replaced by 0 (it is worth 0, Gymnasium's and POMDPs.jl's
+        convention). Either way its rows of ``Q`` are discarded. ``"zero"`` needs listed
+        states.
+    """
+    terminal_reward = _check_terminal_reward(terminal_reward, terminal)
     if Q is None and beta is None and _is_discrete_dp(R):
         ddp = R
         sa = getattr(ddp, "_sa_pair", getattr(ddp, "s_indices", None) is not None)
         beta = _check_discount(ddp.beta)
         if sa:
             return _quantecon_sa(
-                cls, ddp.R, ddp.Q, beta, ddp.s_indices, ddp.a_indices, terminal, action_names
-            )
-        return _quantecon_product(cls, ddp.R, ddp.Q, beta, "sas", terminal, action_names)
+                cls, ddp.R, ddp.Q, beta, ddp.s_indices, ddp.a_indices, terminal,
+                terminal_reward, action_names,
+            )  # fmt: skip
+        return _quantecon_product(
+            cls, ddp.R, ddp.Q, beta, "sas", terminal, terminal_reward, action_names
+        )
     if Q is None or beta is None:
         raise ValidationError(
             "from_quantecon takes a DiscreteDP, or R, Q and beta (with s_indices and "
@@ -642,10 +754,12 @@ def from_quantecon(
     if (s_indices is None) != (a_indices is None):
         raise ValidationError("s_indices and a_indices go together: pass both or neither")
     if s_indices is None:
-        return _quantecon_product(cls, R, Q, beta, layout, terminal, action_names)
+        return _quantecon_product(cls, R, Q, beta, layout, terminal, terminal_reward, action_names)
     if layout is not None:
         raise ValidationError("layout= applies to the product form (3-d Q) only")
-    return _quantecon_sa(cls, R, Q, beta, s_indices, a_indices, terminal, action_names)
+    return _quantecon_sa(
+        cls, R, Q, beta, s_indices, a_indices, terminal, terminal_reward, action_names
+    )
 
 
 def to_quantecon(mdp: FiniteMDP, form: str = "sa") -> Any:
@@ -696,14 +810,37 @@ def _index_column(
     return col
 
 
+class _Given:
+    """Pairs given a reward but no row: their indices, rewards and names (for messages)."""
+
+    def __init__(
+        self,
+        s: np.ndarray,
+        a: np.ndarray,
+        r: np.ndarray,
+        name: Callable[[int], str],
+        unavailable: Callable[[int], str],
+    ) -> None:
+        self.s, self.a, self.r, self.name, self.unavailable = s, a, r, name, unavailable
+
+
+_NONE_GIVEN = _Given(
+    np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), str, str
+)
+
+
 def _pair_rewards(
     pair_s: np.ndarray,
     pair_a: np.ndarray,
     shape: tuple[int, int],
     rewards: Any,
     reward_rows: Any,
-) -> np.ndarray:
-    """Rewards of the pairs from an (n, A) matrix or from [s, a, r] rows."""
+) -> tuple[np.ndarray, _Given]:
+    """Rewards of the pairs with rows, and the pairs given a reward without any row.
+
+    From an (n, A) matrix (an entry of a pair without rows other than 0, -inf or NaN
+    gives it a reward) or from [s, a, r] rows (every entry gives its pair a reward).
+    """
     if (rewards is None) == (reward_rows is None):
         raise ValidationError(
             "rows with 4 columns [s, a, s', p] need exactly one of rewards= (an (n, A) "
@@ -724,28 +861,38 @@ def _pair_rewards(
                 f"rewards[{pair_s[k]}, {pair_a[k]}] = {out[k]} is not finite on a pair with "
                 "transitions"
             )
-        return out
+        given = (arr != 0.0) & ~np.isnan(arr) & (arr != -np.inf)
+        given[pair_s, pair_a] = False
+        gs, ga = (x.astype(np.int64) for x in np.nonzero(given))
+        gr = arr[gs, ga]
+        inf = np.flatnonzero(gr == np.inf)
+        if inf.size:
+            x, u = int(gs[inf[0]]), int(ga[inf[0]])
+            raise ValidationError(
+                f"rewards[{x}, {u}] = inf is not finite (the pair (state {x}, action {u}) has "
+                "no row; it is not available when its entry is 0, -inf or NaN)"
+            )
+        return out, _Given(
+            gs, ga, gr,
+            lambda j: f"rewards[{gs[j]}, {ga[j]}] = {float(gr[j]):.12g}",
+            lambda j: f"set rewards[{gs[j]}, {ga[j]}] = -inf (or 0)",
+        )  # fmt: skip
     rr = check_array("reward_rows", reward_rows)
     if rr.ndim != 2 or rr.shape[1] != 3:
         raise ValidationError(f"reward_rows must have shape (K, 3) [s, a, r]; got {rr.shape}")
     rs = _index_column(rr, 0, "state", n, "reward_rows")
     ra = _index_column(rr, 1, "action", m, "reward_rows")
-    key = pair_s * m + pair_a  # sorted (np.unique in from_transitions)
     rkey = rs * m + ra
-    pos = np.minimum(np.searchsorted(key, rkey), key.size - 1)
-    absent = key[pos] != rkey
-    if absent.any():
-        i = int(np.flatnonzero(absent)[0])
-        raise ValidationError(
-            f"reward_rows[{i}]: the pair (state {rs[i]}, action {ra[i]}) has no transition"
-        )
     order = np.argsort(rkey, kind="stable")
     twice = np.flatnonzero(rkey[order][1:] == rkey[order][:-1])
     if twice.size:
         i = int(order[twice[0] + 1])
         raise ValidationError(f"reward_rows[{i}]: the pair ({rs[i]}, {ra[i]}) has two rewards")
+    key = pair_s * m + pair_a  # sorted (np.unique in from_transitions)
+    pos = np.minimum(np.searchsorted(key, rkey), key.size - 1)
+    absent = key[pos] != rkey
     out = np.full(len(pair_s), np.nan)
-    out[pos] = rr[:, 2]
+    out[pos[~absent]] = rr[~absent, 2]
     miss = np.isnan(out)
     if miss.any():
         k = int(np.flatnonzero(miss)[0])
@@ -753,7 +900,12 @@ def _pair_rewards(
             f"the pair (state {pair_s[k]}, action {pair_a[k]}) has transitions but no reward "
             f"in reward_rows ({int(miss.sum())} such pairs)"
         )
-    return out
+    idx = np.flatnonzero(absent)
+    return out, _Given(
+        rs[idx], ra[idx], np.asarray(rr[idx, 2], dtype=np.float64),
+        lambda j: f"reward_rows[{idx[j]}]",
+        lambda j: f"leave the pair out of reward_rows (drop reward_rows[{idx[j]}])",
+    )  # fmt: skip
 
 
 def from_transitions(
@@ -766,12 +918,37 @@ def from_transitions(
     n_states: Any = None,
     n_actions: Any = None,
     terminal: Any = None,
+    terminal_reward: str = "keep",
     sense: str = "max",
     action_names: Any = None,
 ) -> FiniteMDP:
-    """The converter of :meth:`FiniteMDP.from_transitions`."""
+    """The converter of :meth:`FiniteMDP.from_transitions`.
+
+    Which pairs are available:
+
+    * a pair with rows is available (its reward must be finite);
+    * a pair without rows is not available when nothing gives it a reward: its entry of
+      ``rewards`` is 0, ``-inf`` or NaN, it has no entry in ``reward_rows``, or the
+      rewards are the fifth column of ``rows``;
+    * a pair without rows that is given a reward (any other entry of ``rewards``, an
+      entry of ``reward_rows``) is available only when its state is listed in
+      ``terminal=`` (it pays its reward and the process ends); otherwise it is refused
+      naming the pair: such a pair is what dropping Gymnasium's terminated transitions
+      leaves (Taxi's drop-off), and dropping it with its reward would change ``V*``.
+      Rows whose probabilities are all 0 count as no row.
+
+    ``terminal_reward`` : {"keep", "zero"}
+        What a state listed in ``terminal=`` pays: ``"keep"`` (default) each of its
+        available pairs pays its reward once and moves to the sink (the state's value is
+        the best of them); ``"zero"`` its rewards are replaced by 0, so the state is worth
+        0 (Gymnasium's convention: keep the terminated transitions ``[s, a, s', p]``, give
+        ``s, a`` the transition's reward and list every such ``s'`` in ``terminal=``;
+        POMDPs.jl's terminal states). Either way its rows are discarded. ``"zero"`` needs
+        listed states.
+    """
     discount = _check_discount(discount)
     sense = check_choice("sense", sense, ("max", "min"))
+    terminal_reward = _check_terminal_reward(terminal_reward, terminal)
     tr = check_array("rows", rows, nonempty=True)
     if tr.ndim != 2 or tr.shape[1] not in (4, 5):
         raise ValidationError(
@@ -805,13 +982,28 @@ def from_transitions(
                 f"rows[{i}]: probability {p[i]} times reward {tr[i, 4]} is not finite"
             )
         r = np.bincount(inv, weights=pr, minlength=key.size)
+        given, drop = _NONE_GIVEN, ""
     else:
-        r = _pair_rewards(pair_s, pair_a, (n, m), rewards, reward_rows)
-    return model_from_pairs(
-        cls, q, pair_s, pair_a, r, (n, m), discount,
-        row_name=lambda k: (
+        r, given = _pair_rewards(pair_s, pair_a, (n, m), rewards, reward_rows)
+        drop = " and its reward"
+    k0 = key.size
+    if given.s.size:  # pairs given a reward but no row: empty rows (refused unless terminal)
+        pair_s, pair_a = np.concatenate([pair_s, given.s]), np.concatenate([pair_a, given.a])
+        r = np.concatenate([r, given.r])
+        q = sp.vstack([q, sp.csr_matrix((given.s.size, n))], format="csr")
+
+    def row_name(k: int) -> str:
+        if k >= k0:
+            return given.name(k - k0)
+        return (
             f"the rows of pair (state {pair_s[k]}, action {pair_a[k]}) "
             f"(first: rows[{first_row[k]}])"
-        ),
-        terminal=terminal, sense=sense, action_names=action_names,
+        )
+
+    return model_from_pairs(
+        cls, q, pair_s, pair_a, r, (n, m), discount,
+        row_name=row_name,
+        unavailable=lambda k: given.unavailable(k - k0) if k >= k0 else f"drop its rows{drop}",
+        terminal=terminal, terminal_reward=terminal_reward, sense=sense,
+        action_names=action_names,
     )  # fmt: skip

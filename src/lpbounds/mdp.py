@@ -449,6 +449,7 @@ class FiniteMDP:
         *,
         allowed: Any = None,
         terminal: Any = None,
+        terminal_reward: str = "keep",
         sense: str = "max",
         action_names: Sequence[str] | None = None,
     ) -> FiniteMDP:
@@ -480,6 +481,12 @@ class FiniteMDP:
             reward and moves to the sink. Drop the sink from reported vectors with
             :meth:`user_values` / :meth:`user_bounds` / :meth:`user_policy` (or slice
             ``[:n]``: user states keep their indices). Default: rows must sum to one.
+            An allowed pair whose row has no probability at all is refused, naming the
+            pair, unless its state is listed (``docs/interop.md``: no pair vanishes).
+        terminal_reward : {"keep", "zero"}
+            What a state listed in ``terminal=`` pays: ``"keep"`` (default) each of its
+            actions pays its reward once and moves to the sink; ``"zero"``: it is worth
+            0 (Gymnasium's and POMDPs.jl's convention for a terminal state).
         sense : {"max", "min"}
             ``"min"`` when ``R`` holds costs (see the class parameters).
         action_names : sequence of str, optional
@@ -492,8 +499,8 @@ class FiniteMDP:
             order (padded with probability 0).
         """
         return interop.from_matrices(
-            cls, P, R, discount, allowed=allowed, terminal=terminal, sense=sense,
-            action_names=action_names,
+            cls, P, R, discount, allowed=allowed, terminal=terminal,
+            terminal_reward=terminal_reward, sense=sense, action_names=action_names,
         )  # fmt: skip
 
     @classmethod
@@ -504,6 +511,7 @@ class FiniteMDP:
         discount: float,
         *,
         terminal: Any = None,
+        terminal_reward: str = "keep",
         sense: str = "max",
     ) -> FiniteMDP:
         """Build an MDP from pymdptoolbox's ``(transitions, reward, discount)``.
@@ -511,10 +519,13 @@ class FiniteMDP:
         Every form pymdptoolbox accepts: ``P`` as an (A, n, n) array or A dense or
         sparse (n, n) matrices in a list, tuple, dict or 1-d object array; ``R`` as
         (n,), (n, A) (dense or sparse), (A, n, n), or A dense or sparse matrices.
-        The same reading as :meth:`from_matrices` (see it for ``terminal`` and
-        ``sense``); pymdptoolbox has no action masks.
+        The same reading as :meth:`from_matrices` (see it for ``terminal``,
+        ``terminal_reward`` and ``sense``); pymdptoolbox has no action masks.
         """
-        return interop.from_matrices(cls, P, R, discount, terminal=terminal, sense=sense)
+        return interop.from_matrices(
+            cls, P, R, discount, terminal=terminal, terminal_reward=terminal_reward,
+            sense=sense,
+        )  # fmt: skip
 
     @classmethod
     def from_quantecon(
@@ -527,6 +538,7 @@ class FiniteMDP:
         *,
         layout: str | None = None,
         terminal: Any = None,
+        terminal_reward: str = "keep",
         action_names: Sequence[str] | None = None,
     ) -> FiniteMDP:
         """Build an MDP from QuantEcon's ``DiscreteDP`` or from its arguments.
@@ -550,6 +562,8 @@ class FiniteMDP:
             as states); otherwise taken from the shapes.
         terminal : True or array_like of states, optional
             See :meth:`from_matrices`.
+        terminal_reward : {"keep", "zero"}
+            See :meth:`from_matrices`.
         action_names : sequence of str, optional
 
         Raises
@@ -560,7 +574,7 @@ class FiniteMDP:
         """
         return interop.from_quantecon(
             cls, R, Q, beta, s_indices, a_indices, layout=layout, terminal=terminal,
-            action_names=action_names,
+            terminal_reward=terminal_reward, action_names=action_names,
         )  # fmt: skip
 
     @classmethod
@@ -574,6 +588,7 @@ class FiniteMDP:
         n_states: int | None = None,
         n_actions: int | None = None,
         terminal: Any = None,
+        terminal_reward: str = "keep",
         sense: str = "max",
         action_names: Sequence[str] | None = None,
     ) -> FiniteMDP:
@@ -584,24 +599,27 @@ class FiniteMDP:
         rows : array_like (K, 4) or (K, 5)
             ``[state, action, next_state, probability]``, or with a fifth column the
             reward of that transition (the pair's reward is then ``sum p * r``). A pair
-            ``(s, a)`` is available exactly when it has rows; rows repeating a next state
-            add up (eq. 2).
+            with rows is available; rows repeating a next state add up (eq. 2).
         discount : float
         rewards : array_like (n, A), optional
-            ``R[s, a]`` (MDPSolver's ``rewards``); entries of pairs without rows are
-            ignored.
+            ``R[s, a]`` (MDPSolver's ``rewards``). A pair without rows is not available
+            when its entry is 0, ``-inf`` or NaN; any other reward on a pair without rows
+            is refused, naming the pair, unless its state is listed in ``terminal=``
+            (then it pays that reward and ends): a pair never vanishes silently
+            (``docs/interop.md``).
         reward_rows : array_like (K', 3), optional
             ``[state, action, reward]`` (MDPSolver's ``rewardsElementwise``): one per
             available pair. With 4 columns, exactly one of ``rewards`` and
             ``reward_rows`` is required (never guessed from a shape).
         n_states, n_actions : int, optional
             Default: one more than the largest index in ``rows``.
-        terminal, sense, action_names
+        terminal, terminal_reward, sense, action_names
             See :meth:`from_matrices`.
         """
         return interop.from_transitions(
             cls, rows, discount, rewards, reward_rows=reward_rows, n_states=n_states,
-            n_actions=n_actions, terminal=terminal, sense=sense, action_names=action_names,
+            n_actions=n_actions, terminal=terminal, terminal_reward=terminal_reward,
+            sense=sense, action_names=action_names,
         )  # fmt: skip
 
     def to_quantecon(self, form: str = "sa") -> Any:
