@@ -5,8 +5,11 @@ fails the test if it is ever called)."""
 
 from __future__ import annotations
 
+import errno
 import json
 import os
+import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -318,3 +321,195 @@ def test_cli_runs_a_packaged_model_outside_the_checkout(tmp_path):
     )
     assert proc.returncode == 0, proc.stderr
     assert "exact solve of garnet-small" in proc.stdout
+
+
+# ------------------------------------------------------------ --out that cannot be replaced
+def _previous(tmp_path: Path, *files: str) -> Path:
+    """An earlier output ``tmp_path/o`` holding ``files`` (each with the text "old")."""
+    out = tmp_path / "o"
+    out.mkdir()
+    for name in files:
+        (out / name).write_text("old")
+    return out
+
+
+def _refuse_moving(monkeypatch, path: Path) -> None:
+    """``os.rename`` and ``os.replace`` of ``path`` fail, as for a folder that cannot be
+    moved (immutable, a mount point, another user's in a sticky folder)."""
+    target = os.path.abspath(path)
+
+    def refusing(real):
+        def move(src, dst, *args, **kwargs):
+            if os.path.abspath(src) == target:
+                raise PermissionError(errno.EPERM, "Operation not permitted", os.fspath(src))
+            return real(src, dst, *args, **kwargs)
+
+        return move
+
+    monkeypatch.setattr(os, "rename", refusing(os.rename))
+    monkeypatch.setattr(os, "replace", refusing(os.replace))
+
+
+@pytest.mark.parametrize("command", ["reproduce", "solve"])
+def test_an_out_that_cannot_be_moved_is_refused_before_any_computation(
+    tmp_path, capsys, monkeypatch, no_computation, command
+):
+    name = "summary.json" if command == "reproduce" else "solution.json"
+    out = _previous(tmp_path, name)
+    _refuse_moving(monkeypatch, out)
+    model = [SMALL, *QUICK] if command == "reproduce" else ["garnet-small"]
+    assert main([command, *model, "--out", str(out)]) == 2
+    _one_line_error(capsys, "--out", str(out), "cannot be replaced", "Operation not permitted")
+    assert [p.name for p in out.iterdir()] == [name] and (out / name).read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]  # no .o.old-*, no lock
+
+
+def test_check_output_dir_tries_the_move_and_puts_the_folder_back(tmp_path, monkeypatch):
+    out = _previous(tmp_path, "a.txt")
+    assert check_output_dir(out) == out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
+    assert (out / "a.txt").read_text() == "old"
+    _refuse_moving(monkeypatch, out)
+    with pytest.raises(OutputError, match="cannot be replaced"):
+        check_output_dir(out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
+
+
+def test_an_immutable_out_is_refused_before_the_computation(tmp_path):
+    """A real folder that cannot be moved (``chattr +i``; where it is available)."""
+    out = _previous(tmp_path, "solution.json")
+    chattr = shutil.which("chattr")
+    if chattr is None or subprocess.run([chattr, "+i", str(out)], capture_output=True).returncode:
+        pytest.skip("chattr +i is not available here (root and a file system with the flag)")
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "lpbounds.cli.main", "solve", "garnet-small", "--out", str(out)],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+    finally:
+        subprocess.run([chattr, "-i", str(out)], check=True)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().count("\n") == 0 and "Traceback" not in proc.stderr
+    assert "cannot be replaced" in proc.stderr
+    assert "exact solve" not in proc.stdout  # refused before the solve, not after it
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
+
+
+def test_a_held_lock_is_reported_before_the_computation_of_solve(tmp_path, capsys, no_computation):
+    out = tmp_path / "o"
+    lock = tmp_path / ".o.lock"
+    lock.write_text(f"{os.getpid()}\n")  # a live process holds it
+    assert main(["solve", "garnet-small", "--out", str(out)]) == 2
+    _one_line_error(capsys, "locked by another run", str(lock))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".o.lock"]
+
+
+def test_a_failed_move_into_place_keeps_the_previous_output_and_leaves_nothing(
+    tmp_path, monkeypatch
+):
+    out = _previous(tmp_path, "old.txt")
+    target = AtomicDirectory(out)
+    with pytest.raises(OSError), target as tmp:
+        (tmp / "new.txt").write_text("new")
+        _refuse_moving(monkeypatch, tmp)  # the new folder cannot be moved into place
+        target.commit()
+    assert [p.name for p in out.iterdir()] == ["old.txt"]
+    assert (out / "old.txt").read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
+
+
+# ---------------------------------------------------------------------- Ctrl-C at the commit
+@pytest.fixture
+def sigint_raises():
+    """SIGINT raises KeyboardInterrupt, as in a terminal (even when the suite runs as a
+    background job, which ignores it)."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+def _sigint_after_the_move_into_place(monkeypatch) -> None:
+    """Ctrl-C just after the commit renamed the new folder (``.NAME.partial-*``) into place."""
+
+    def signalling(real):
+        def move(src, dst, *args, **kwargs):
+            real(src, dst, *args, **kwargs)
+            if ".partial-" in os.path.basename(os.fspath(src)):
+                os.kill(os.getpid(), signal.SIGINT)
+
+        return move
+
+    monkeypatch.setattr(os, "rename", signalling(os.rename))
+    monkeypatch.setattr(os, "replace", signalling(os.replace))
+
+
+def test_ctrl_c_just_after_the_rename_leaves_the_new_output_and_nothing_else(
+    tmp_path, monkeypatch, sigint_raises
+):
+    out = _previous(tmp_path, "old.txt")
+    _sigint_after_the_move_into_place(monkeypatch)
+    target = AtomicDirectory(out)
+    try:
+        with target as tmp:
+            (tmp / "new.txt").write_text("new")
+            target.commit()
+    except KeyboardInterrupt:  # handed on once the commit is complete
+        pass
+    assert target.committed
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "new.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]  # no .o.old-*, no lock
+
+
+def test_ctrl_c_while_the_previous_output_is_removed_still_removes_it(
+    tmp_path, monkeypatch, sigint_raises
+):
+    out = _previous(tmp_path, "old.txt")
+    real = shutil.rmtree
+
+    def rmtree(path, *args, **kwargs):
+        if ".old-" in os.path.basename(os.fspath(path)):
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(path, *args, **kwargs)
+
+    monkeypatch.setattr(shutil, "rmtree", rmtree)
+    target = AtomicDirectory(out)
+    try:
+        with target as tmp:
+            (tmp / "new.txt").write_text("new")
+            target.commit()
+    except KeyboardInterrupt:
+        pass
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "new.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
+
+
+def test_ctrl_c_after_the_rename_exits_0_with_the_new_output(
+    tmp_path, capsys, monkeypatch, sigint_raises
+):
+    out = tmp_path / "o"
+    assert main(["solve", "garnet-small", "--out", str(out), "--quiet"]) == 0
+    _sigint_after_the_move_into_place(monkeypatch)
+    assert main(["solve", "garnet-small", "--method", "pi", "--out", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err and len(err.splitlines()) == 1
+    assert err.startswith("lpbounds solve: interrupted after") and str(out) in err
+    assert json.loads((out / "solution.json").read_text())["method"] == "pi"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o"]
+
+
+# ---------------------------------------------------------------------- a model that is no file
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_a_fifo_as_the_model_is_refused_without_opening_it(tmp_path):
+    fifo = tmp_path / "model.toml"
+    os.mkfifo(fifo)
+    proc = subprocess.run(  # a process of its own: opening the FIFO would block it
+        [sys.executable, "-m", "lpbounds.cli.main", "solve", str(fifo)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().count("\n") == 0 and "Traceback" not in proc.stderr
+    assert f"not a regular file: {str(fifo)!r}" in proc.stderr

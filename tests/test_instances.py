@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import re
+
 import pytest
 
 import lpbounds as lb
@@ -54,3 +57,24 @@ def test_instance_without_partition(tmp_path):
     )
     with pytest.raises(ValidationError, match="no \\[partition\\] table"):
         inst.partition()
+
+
+@pytest.mark.parametrize("kind", ["FIFO", "directory", "character device"])
+def test_a_model_that_is_not_a_regular_file_is_named(tmp_path, kind):
+    """Checked with stat before any open (opening a FIFO would block)."""
+    if kind == "FIFO":
+        if not hasattr(os, "mkfifo"):
+            pytest.skip("no FIFOs on this platform")
+        path = tmp_path / "model.toml"
+        os.mkfifo(path)
+    elif kind == "directory":
+        path = tmp_path / "models.toml"
+        path.mkdir()
+    else:
+        path = tmp_path.joinpath("/dev/null")
+        if not path.exists():
+            pytest.skip("no /dev/null")
+    with pytest.raises(
+        ValidationError, match=re.escape(f"not a regular file: '{path}' (a {kind})")
+    ):
+        lb.load_instance(path)

@@ -4,13 +4,16 @@ partial folder or lock left beside it.
 
 The process is interrupted with a real SIGINT: at the start of chosen steps (the
 ``LPBOUNDS_INTERRUPT_AT`` hook makes the process signal itself there, so the point is
-exact) and after a delay measured from the moment the run holds its lock."""
+exact), just after the commit's rename (through a wrapper of ``os.replace``/``os.rename``),
+and after a delay measured from the moment the run holds its lock. Once the new folder
+is renamed into place the run is committed: exit status 0 and no ``.NAME.old-*`` left."""
 
 from __future__ import annotations
 
 import hashlib
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -92,10 +95,9 @@ def test_interrupt_after_a_delay_keeps_the_previous_output_or_completes(previous
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=600)
     assert "Traceback" not in err
-    if proc.returncode == 130:  # before the commit: untouched; after it: the new output
-        if _snapshot(previous) != before:
-            assert _assert_complete(previous)["instance"] == "patrol-small"
-    else:
+    if proc.returncode == 130:  # interrupted before the rename: untouched
+        assert _snapshot(previous) == before, "exit 130 but --out changed"
+    else:  # completed, or interrupted after the rename (committed: exit 0)
         assert proc.returncode == 0, err
         assert _assert_complete(previous)["instance"] == "patrol-small"
     assert sorted(p.name for p in previous.parent.iterdir()) == [previous.name]
@@ -107,3 +109,43 @@ def test_interrupt_without_previous_output_leaves_nothing(tmp_path):
     _, err = proc.communicate(timeout=600)
     assert proc.returncode == 130 and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []
+
+
+#: ``lpbounds`` with Ctrl-C sent to itself just after the commit renamed the new folder
+#: (``.NAME.partial-*``) into place: the moment the previous output is only beside it.
+AFTER_THE_RENAME = """
+import os, signal, sys
+
+def signalling(real):
+    def move(src, dst, *args, **kwargs):
+        real(src, dst, *args, **kwargs)
+        if ".partial-" in os.path.basename(os.fspath(src)):
+            os.kill(os.getpid(), signal.SIGINT)
+    return move
+
+os.replace, os.rename = signalling(os.replace), signalling(os.rename)
+from lpbounds.cli.main import entry
+sys.argv[0] = "lpbounds"
+entry()
+"""
+
+
+def test_interrupt_just_after_the_rename_is_a_completed_run(previous, tmp_path):
+    out = tmp_path / "out"
+    shutil.copytree(previous, out)
+    before = _snapshot(out)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", AFTER_THE_RENAME, "reproduce", SMALL, "--out", str(out), *ARGS],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1].startswith("lpbounds reproduce: interrupted after")
+    assert _snapshot(out) != before, "the new output is not in place"
+    man = _assert_complete(out)
+    assert man["instance"] == "patrol-small"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"], "leftovers beside --out"

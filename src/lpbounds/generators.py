@@ -2,14 +2,29 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
-from .validation import check_bool, check_int, check_real, check_seed
+from .validation import (
+    check_allocation,
+    check_bool,
+    check_int,
+    check_real,
+    check_seed,
+    check_value_scale,
+)
 
-__all__ = ["garnet", "random_partition"]
+__all__ = [
+    "check_garnet_rewards",
+    "check_garnet_size",
+    "garnet",
+    "garnet_bytes",
+    "random_partition",
+]
 
 
 def garnet(
@@ -49,10 +64,12 @@ def garnet(
     n_states = check_int("n_states", n_states, lo=1)
     n_actions = check_int("n_actions", n_actions, lo=1)
     branching = check_int("branching", branching, lo=1)
-    check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
+    lam = check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
     seed = check_seed("seed", seed)
     shared_probabilities = check_bool("shared_probabilities", shared_probabilities)
     lo, hi = _check_range("reward_range", reward_range)
+    check_garnet_rewards("reward_range", lo, hi, lam)
+    check_garnet_size(n_states, n_actions, branching, shared_probabilities)
     allowed_fraction = check_real(
         "allowed_fraction", allowed_fraction, lo=0.0, hi=1.0, lo_open=True
     )
@@ -81,11 +98,58 @@ def random_partition(n_states: int, n_partitions: int, seed: int | None = 0) -> 
         raise ValidationError(
             f"n_partitions must lie in [1, n_states={n_states}]; got {n_partitions}"
         )
+    # the labels, the permutation that places one state in each set, and their range
+    check_allocation(f"n_states = {n_states}", 8 * (2 * n_states + n_partitions), "the labels")
     seed = check_seed("seed", seed)
     rng = np.random.default_rng(seed)
     labels = rng.integers(0, n_partitions, size=n_states)
     labels[rng.permutation(n_states)[:n_partitions]] = np.arange(n_partitions)
     return Partition(labels)
+
+
+def garnet_bytes(
+    n_states: int, n_actions: int, branching: int, shared_probabilities: bool = False
+) -> int:
+    """Bytes of the arrays :func:`garnet` allocates from its sizes: ``n * A * L``
+    successors drawn as int64 and cast to the index dtype (both alive at once), their
+    float64 probabilities (``L`` of them when shared) and ``n * A`` float64 rewards. Python
+    integers: no overflow, whatever the sizes."""
+    pairs = n_states * n_actions
+    entries = pairs * branching
+    index = np.dtype(index_dtype(n_states)).itemsize
+    probabilities = branching if shared_probabilities else entries
+    return entries * (8 + index) + 8 * probabilities + 8 * pairs
+
+
+def check_garnet_size(
+    n_states: int,
+    n_actions: int,
+    branching: int,
+    shared_probabilities: bool = False,
+    prefix: str = "",
+) -> None:
+    """Refuse sizes whose arrays (:func:`garnet_bytes`) exceed this machine's memory,
+    before anything is allocated; the message names the largest size first (with
+    ``prefix``, e.g. ``"[model] "``), the bytes needed and the bytes available."""
+    sizes = {"n_states": n_states, "n_actions": n_actions, "branching": branching}
+    first = max(sizes, key=lambda k: sizes[k])
+    others = ", ".join(f"{k} = {v}" for k, v in sizes.items() if k != first)
+    check_allocation(
+        f"{prefix}{first} = {sizes[first]} (with {others})",
+        garnet_bytes(n_states, n_actions, branching, shared_probabilities),
+        "the successors, probabilities and rewards",
+    )
+
+
+def check_garnet_rewards(name: str, low: float, high: float, discount: float) -> None:
+    """Refuse a reward range whose value scale ``max|R| / (1 - discount)`` is beyond
+    :data:`~lpbounds.validation.MAX_VALUE_SCALE`, or whose width ``high - low`` is not
+    a float64 (the draw would overflow), before anything is drawn."""
+    check_value_scale(max(abs(low), abs(high)), discount, name)
+    if not math.isfinite(high - low):
+        raise ValidationError(
+            f"{name} = ({low}, {high}): the width high - low overflows float64"
+        )  # pragma: no cover - MAX_VALUE_SCALE keeps the width finite
 
 
 def _check_range(name: str, value: object) -> tuple[float, float]:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import stat
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -94,14 +95,16 @@ def resolve_instance_path(source: str | Path) -> Path:
     Raises
     ------
     ValidationError
-        The path is a directory, or names no file and no packaged model (the message lists
-        the packaged names).
+        The path exists but is not a regular file (a directory, a FIFO, a device: found
+        with ``stat``, never opened, as opening a FIFO would block), or names no file and
+        no packaged model (the message lists the packaged names).
     """
     path = Path(source)
-    if path.is_file():
+    kind = _file_kind(path)
+    if kind == "regular file":
         return path
-    if path.is_dir():
-        raise ValidationError(f"model {str(source)!r} is a directory, not an instance file")
+    if kind is not None:
+        raise ValidationError(f"model: not a regular file: {str(source)!r} (a {kind})")
     bare = len(path.parts) == 1 or (len(path.parts) == 2 and path.parts[0] == "models")
     if bare and path.suffix in ("", ".toml"):
         stem = path.name[: -len(".toml")] if path.suffix == ".toml" else path.name
@@ -114,6 +117,26 @@ def resolve_instance_path(source: str | Path) -> Path:
         f"no instance file {str(source)!r}, and no packaged model of that name; "
         f"packaged models: {known}"
     )
+
+
+_FILE_KINDS = (
+    (stat.S_ISREG, "regular file"),
+    (stat.S_ISDIR, "directory"),
+    (stat.S_ISFIFO, "FIFO"),
+    (stat.S_ISCHR, "character device"),
+    (stat.S_ISBLK, "block device"),
+    (stat.S_ISSOCK, "socket"),
+)
+
+
+def _file_kind(path: Path) -> str | None:
+    """What ``path`` is (``"regular file"``, ``"FIFO"``, ...) by ``stat``, which never opens
+    it; None when nothing is there (or it cannot be looked at)."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    return next((name for test, name in _FILE_KINDS if test(mode)), "special file")
 
 
 def _resolve(spec: str) -> Callable[..., Any]:
@@ -218,7 +241,12 @@ def load_instance(source: str | Path | Mapping[str, Any], name: str | None = Non
 def _read_toml(path: Path) -> dict[str, Any]:
     """The parsed tables of an instance file (unreadable or invalid files: ValidationError)."""
     try:
-        with path.open("rb") as fh:
+        # O_NONBLOCK: a path replaced by a FIFO since it was resolved does not block the
+        # open; fstat then refuses it (no effect on a regular file)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        with os.fdopen(fd, "rb") as fh:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                raise ValidationError(f"model: not a regular file: {str(path)!r}")
             return tomllib.load(fh)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ValidationError(f"{path}: not valid TOML: {exc}") from exc
@@ -241,24 +269,35 @@ _GARNET_KEYS = {
 
 
 def _build_garnet(table: Mapping[str, Any]) -> FiniteMDP:
-    from .generators import garnet
+    from .generators import check_garnet_rewards, check_garnet_size, garnet
 
     c = check_keys(table, _GARNET_KEYS, "model")
     # the file's values are checked, never coerced (a "0.9" string or 10.7 states is an error)
+    n = check_int("[model] n_states", c["n_states"], lo=1)
+    a = check_int("[model] n_actions", c["n_actions"], lo=1)
+    branching = check_int("[model] branching", c["branching"], lo=1)
+    discount = check_real("[model] discount", c["discount"], lo=0.0, hi=1.0, hi_open=True)
+    seed = check_int("[model] seed", c["seed"], lo=0)
+    shared = check_bool("[model] shared_probabilities", c["shared_probabilities"])
+    low = check_real("[model] reward_low", c["reward_low"])
+    high = check_real("[model] reward_high", c["reward_high"])
+    allowed = check_real(
+        "[model] allowed_fraction", c["allowed_fraction"], lo=0.0, hi=1.0, lo_open=True
+    )
+    if low > high:
+        raise ValidationError(f"[model] reward_low = {low} is above reward_high = {high}")
+    # named as the file names them, before garnet() allocates anything
+    check_garnet_rewards("[model] reward_low, reward_high", low, high, discount)
+    check_garnet_size(n, a, branching, shared, prefix="[model] ")
     return garnet(
-        check_int("[model] n_states", c["n_states"], lo=1),
-        check_int("[model] n_actions", c["n_actions"], lo=1),
-        check_int("[model] branching", c["branching"], lo=1),
-        check_real("[model] discount", c["discount"], lo=0.0, hi=1.0, hi_open=True),
-        check_int("[model] seed", c["seed"], lo=0),
-        shared_probabilities=check_bool("[model] shared_probabilities", c["shared_probabilities"]),
-        reward_range=(
-            check_real("[model] reward_low", c["reward_low"]),
-            check_real("[model] reward_high", c["reward_high"]),
-        ),
-        allowed_fraction=check_real(
-            "[model] allowed_fraction", c["allowed_fraction"], lo=0.0, hi=1.0, lo_open=True
-        ),
+        n,
+        a,
+        branching,
+        discount,
+        seed,
+        shared_probabilities=shared,
+        reward_range=(low, high),
+        allowed_fraction=allowed,
     )
 
 

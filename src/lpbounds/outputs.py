@@ -5,8 +5,14 @@ temporary folder beside ``DIR`` and renames it into place only when every file i
 written, with a ``manifest.json`` (file names, sizes, SHA-256, package version). Until
 then a previous complete ``DIR`` is left untouched. A lock file beside ``DIR``
 (``.DIR.lock``, created with ``O_EXCL``) keeps two runs from writing into one folder.
-Ctrl-C (or any error) removes the temporary folder and the lock; the rename itself runs
-with SIGINT blocked, so an interrupt cannot fall between its two steps.
+
+One rule decides what an interruption means. **Before** the rename of the new folder into
+place, Ctrl-C (or any error) removes the temporary folder and the lock and leaves ``DIR``
+exactly as it was (the command line exits 130). **Once** the rename has happened the run
+is committed: the commit (moving a previous ``DIR`` aside, renaming the new folder into
+place, removing the previous copy and the lock) runs with SIGINT held, so nothing is
+left beside ``DIR`` whenever Ctrl-C comes; the held KeyboardInterrupt is raised after the
+commit, and the command line, seeing :func:`committed_outputs`, exits 0.
 
 Single files (``--json PATH``) are written to a temporary name in the same folder and
 renamed over ``PATH``.
@@ -17,8 +23,10 @@ machine and the date) goes into ``manifest.json`` and into the files' own summar
 
 Every check runs before any computation: :func:`check_output_file` and
 :func:`check_output_dir` probe the folder that will receive the output by creating and
-removing a temporary file there, which is the only reliable test (permission bits say
-nothing for root, read-only mounts or ACLs).
+removing a temporary file there, and :func:`check_output_dir` takes the lock for a moment
+and moves an existing ``DIR`` aside and back (what its replacement will do), which are
+the only reliable tests (permission bits say nothing for root, read-only mounts, ACLs,
+immutable folders, mount points or sticky folders).
 """
 
 from __future__ import annotations
@@ -29,13 +37,14 @@ import hashlib
 import json
 import os
 import platform
+import secrets
 import shutil
 import signal
 import subprocess
 import tempfile
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -47,6 +56,7 @@ __all__ = [
     "AtomicDirectory",
     "check_output_dir",
     "check_output_file",
+    "committed_outputs",
     "metadata_lines",
     "run_metadata",
     "write_text_atomic",
@@ -209,24 +219,9 @@ def check_output_file(path: str | Path, what: str = "output") -> Path:
     return p
 
 
-def check_output_dir(
-    path: str | Path, what: str = "--out", replaceable: Sequence[str] = ("*",)
-) -> Path:
-    """Check, before any computation, that the folder ``path`` can be (re)written.
-
-    An existing ``path`` must be a directory whose entries all match ``replaceable``
-    (glob patterns of the files the command writes: a folder holding anything else is
-    not replaced, so ``--out ~/Documents`` cannot delete a user's files); the folder that
-    will hold it (or its nearest existing ancestor) must accept new entries. Nothing is
-    created.
-
-    Raises
-    ------
-    OutputError
-        Naming ``what`` and the path (and the foreign entries).
-    """
-    p = Path(path)
-    if p.exists() and not p.is_dir():
+def _check_dir(p: Path, what: str, replaceable: Sequence[str]) -> None:
+    """The checks of :func:`check_output_dir` that create nothing and touch no lock."""
+    if os.path.lexists(p) and not p.is_dir():
         raise OutputError(f"{what}: {str(p)!r} exists and is not a directory")
     if p.is_dir():
         foreign = sorted(
@@ -241,7 +236,36 @@ def check_output_dir(
                 f"({shown}); it replaces the folder as a whole, so give a new or empty folder"
             )
     _probe_writable(_existing_ancestor(p.parent), what)
-    return p
+
+
+def check_output_dir(
+    path: str | Path, what: str = "--out", replaceable: Sequence[str] = ("*",)
+) -> Path:
+    """Check, before any computation, that the folder ``path`` can be (re)written.
+
+    An existing ``path`` must be a directory whose entries all match ``replaceable``
+    (glob patterns of the files the command writes: a folder holding anything else is
+    not replaced, so ``--out ~/Documents`` cannot delete a user's files) and that can be
+    moved (it is moved aside and back, with its lock held and SIGINT held: an immutable
+    folder, a mount point or another user's folder in a sticky one cannot); the folder
+    that will hold it (or its nearest existing ancestor) must accept new entries; and no
+    other live run may hold its lock. Nothing is left behind.
+
+    Raises
+    ------
+    OutputError
+        Naming ``what`` and the path (and the foreign entries, or the lock).
+    """
+    p = Path(os.path.abspath(path))
+    _check_dir(p, what, replaceable)
+    if p.parent.is_dir():
+        lock = _take_lock(p, what)
+        try:
+            if p.is_dir():
+                _probe_movable(p, what)
+        finally:
+            _drop_lock(lock)
+    return Path(path)
 
 
 def write_text_atomic(path: str | Path, text: str) -> Path:
@@ -271,19 +295,35 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-@contextlib.contextmanager
-def _sigint_blocked() -> Iterator[None]:
-    """Hold SIGINT (delivered after the block) on the main thread, where POSIX allows."""
-    can = (
-        hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()
-    )
-    if can:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        if can:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+class _HeldSigint:
+    """Hold SIGINT during a ``with`` block and hand a Ctrl-C received meanwhile to the
+    previous handler at its end (a KeyboardInterrupt, by default), so that the block's
+    file operations all happen. Python handles signals on the main thread only, so
+    elsewhere (and when SIGINT is ignored) this does nothing."""
+
+    def __enter__(self) -> _HeldSigint:
+        self.held = False
+        self._previous: Any = None
+        if threading.current_thread() is threading.main_thread():
+            previous = signal.getsignal(signal.SIGINT)
+            if previous not in (signal.SIG_IGN, None):
+                self._previous = previous
+                signal.signal(signal.SIGINT, self._hold)
+        return self
+
+    def _hold(self, signum: int, frame: Any) -> None:
+        self.held = True
+
+    def __exit__(self, *exc: object) -> None:
+        previous, self._previous = self._previous, None
+        if previous is None:
+            return
+        signal.signal(signal.SIGINT, previous)
+        if self.held:
+            if callable(previous):
+                previous(signal.SIGINT, None)
+            else:  # SIG_DFL: end the process as that SIGINT would have
+                signal.raise_signal(signal.SIGINT)
 
 
 def _umask() -> int:
@@ -302,13 +342,109 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
+# ---------------------------------------------------------------------- lock, moves
+def _lock_path(out: Path) -> Path:
+    return out.parent / f".{out.name}.lock"
+
+
+def _lock_holder(lock: Path) -> int | None:
+    try:
+        return int(lock.read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _take_lock(out: Path, what: str = "--out") -> Path:
+    """Create ``.NAME.lock`` beside ``out`` (``O_EXCL``, holding this process id); a lock
+    left by a process that no longer exists is taken over. OutputError when another run
+    holds it or it cannot be created."""
+    lock = _lock_path(out)
+    for _ in range(2):
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            holder = _lock_holder(lock)
+            if holder is not None and not _pid_alive(holder):
+                with contextlib.suppress(OSError):
+                    os.unlink(lock)  # a run that was killed left it
+                continue
+            raise OutputError(
+                f"{what} {str(out)!r} is locked by another run (lock file {str(lock)!r}"
+                + (f", process {holder}" if holder is not None else "")
+                + "); wait for it, or delete the lock file if no such run is active"
+            ) from None
+        except OSError as exc:
+            raise OutputError(
+                f"cannot create the lock file {str(lock)!r} ({exc.strerror or exc})"
+            ) from exc
+        with os.fdopen(fd, "w") as fh:
+            fh.write(f"{os.getpid()}\n")
+        return lock
+    raise OutputError(f"cannot take the lock file {str(lock)!r}")  # pragma: no cover
+
+
+def _drop_lock(lock: Path) -> None:
+    with contextlib.suppress(OSError):
+        os.unlink(lock)
+
+
+def _aside(out: Path) -> Path:
+    """A free name beside ``out`` to move it to: ``.NAME.old-XXXXXXXX``."""
+    while True:
+        p = out.parent / f".{out.name}.old-{secrets.token_hex(4)}"
+        if not os.path.lexists(p):
+            return p
+
+
+def _remove(path: Path) -> None:
+    """Delete ``path`` (a folder, or a symbolic link: ``--out`` may have been one)."""
+    if path.is_symlink() or not path.is_dir():
+        with contextlib.suppress(OSError):
+            os.unlink(path)
+    else:
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def _probe_movable(out: Path, what: str) -> None:
+    """Move ``out`` aside and back, as its replacement will (OutputError if it cannot be
+    moved). Run with the lock held and SIGINT held, so ``out`` is back before Ctrl-C acts."""
+    aside = _aside(out)
+    with _HeldSigint():
+        try:
+            os.replace(out, aside)
+        except OSError as exc:
+            raise OutputError(
+                f"{what}: {str(out)!r} cannot be replaced: moving it aside fails "
+                f"({exc.strerror or exc}); give another folder"
+            ) from exc
+        try:
+            os.replace(aside, out)
+        except OSError as exc:  # pragma: no cover - the folder was just moved from there
+            raise OutputError(
+                f"{what}: {str(out)!r} was moved to {str(aside)!r} to test that it can be "
+                f"replaced and cannot be moved back ({exc.strerror or exc}); move it back"
+            ) from exc
+
+
+#: Output folders this process has committed (renamed into place), oldest first.
+_COMMITTED: list[Path] = []
+
+
+def committed_outputs() -> tuple[Path, ...]:
+    """The folders :meth:`AtomicDirectory.commit` has renamed into place in this process,
+    oldest first: a Ctrl-C after a command's commit ends a completed run (the command
+    line compares this before and after a command and exits 0)."""
+    return tuple(_COMMITTED)
+
+
 class AtomicDirectory:
     """A folder that appears complete (with a manifest) or not at all.
 
-    ``with AtomicDirectory(out) as tmp:`` takes the lock ``.<name>.lock`` beside ``out``
-    and gives a fresh temporary folder ``tmp`` beside it; write every file there and call
-    :meth:`commit` at the end. Leaving the block without :meth:`commit` (an exception,
-    Ctrl-C) deletes ``tmp`` and leaves ``out`` as it was; the lock is removed either way.
+    ``with AtomicDirectory(out) as tmp:`` takes the lock ``.<name>.lock`` beside ``out``,
+    checks that an existing ``out`` can be moved, and gives a fresh temporary folder
+    ``tmp`` beside it; write every file there and call :meth:`commit` at the end. Leaving
+    the block without :meth:`commit` (an exception, Ctrl-C) deletes ``tmp`` and leaves
+    ``out`` as it was; the lock is removed either way.
 
     Parameters
     ----------
@@ -322,50 +458,20 @@ class AtomicDirectory:
     def __init__(self, out: str | Path, replaceable: Sequence[str] = ("*",)) -> None:
         self.out = Path(os.path.abspath(out))
         self.replaceable = tuple(replaceable)
-        self.lock = self.out.parent / f".{self.out.name}.lock"
+        self.lock = _lock_path(self.out)
         self.tmp: Path | None = None
         self.committed = False
         self._locked = False
 
-    # ------------------------------------------------------------------ lock
-    def _acquire(self) -> None:
-        self.out.parent.mkdir(parents=True, exist_ok=True)
-        for _ in range(2):
-            try:
-                fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            except FileExistsError:
-                holder = self._holder()
-                if holder is not None and not _pid_alive(holder):
-                    with contextlib.suppress(OSError):
-                        os.unlink(self.lock)  # a run that was killed left it
-                    continue
-                raise OutputError(
-                    f"--out {str(self.out)!r} is locked by another run "
-                    f"(lock file {str(self.lock)!r}"
-                    + (f", process {holder}" if holder is not None else "")
-                    + "); wait for it, or delete the lock file if no such run is active"
-                ) from None
-            except OSError as exc:
-                raise OutputError(
-                    f"cannot create the lock file {str(self.lock)!r} ({exc.strerror or exc})"
-                ) from exc
-            with os.fdopen(fd, "w") as fh:
-                fh.write(f"{os.getpid()}\n")
-            self._locked = True
-            return
-        raise OutputError(f"cannot take the lock file {str(self.lock)!r}")  # pragma: no cover
-
-    def _holder(self) -> int | None:
-        try:
-            return int(self.lock.read_text().split()[0])
-        except (OSError, ValueError, IndexError):
-            return None
-
     # ------------------------------------------------------------------ context
     def __enter__(self) -> Path:
-        check_output_dir(self.out, replaceable=self.replaceable)
-        self._acquire()
+        _check_dir(self.out, "--out", self.replaceable)
+        self.out.parent.mkdir(parents=True, exist_ok=True)
+        _take_lock(self.out)
+        self._locked = True
         try:
+            if self.out.is_dir():
+                _probe_movable(self.out, "--out")
             self.tmp = Path(
                 tempfile.mkdtemp(prefix=f".{self.out.name}.partial-", dir=self.out.parent)
             )
@@ -381,16 +487,16 @@ class AtomicDirectory:
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        try:
-            if self.tmp is not None and self.tmp.exists():
-                shutil.rmtree(self.tmp, ignore_errors=True)
-        finally:
-            self._release()
+        with _HeldSigint():  # a second Ctrl-C does not leave half of tmp behind
+            try:
+                if self.tmp is not None and self.tmp.exists():
+                    shutil.rmtree(self.tmp, ignore_errors=True)
+            finally:
+                self._release()
 
     def _release(self) -> None:
         if self._locked:
-            with contextlib.suppress(OSError):
-                os.unlink(self.lock)
+            _drop_lock(self.lock)
             self._locked = False
 
     # ------------------------------------------------------------------ commit
@@ -419,7 +525,14 @@ class AtomicDirectory:
         }
 
     def commit(self, extra: dict[str, Any] | None = None) -> Path:
-        """Write ``manifest.json`` and move the folder into place; returns ``out``."""
+        """Write ``manifest.json`` and move the folder into place; returns ``out``.
+
+        The moves, the removal of the previous copy and of the lock run with SIGINT held:
+        once the new folder is in place the run is committed and nothing is left beside
+        it; a Ctrl-C received meanwhile is raised (KeyboardInterrupt) after all that. If
+        the new folder cannot be moved into place, the previous ``out`` is put back
+        (OutputError).
+        """
         if self.tmp is None:
             raise OutputError("commit() outside the with-block")
         man = self.manifest(extra)
@@ -428,14 +541,34 @@ class AtomicDirectory:
             if p.is_file():
                 with p.open("rb") as fh:
                     os.fsync(fh.fileno())
-        with _sigint_blocked():
-            old: Path | None = None
-            if self.out.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.old-", dir=self.out.parent))
-                os.replace(self.out, old / "out")
-            os.replace(self.tmp, self.out)
+        with _HeldSigint():
+            old = self._move_into_place()
             self.tmp = None
             self.committed = True
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+            _COMMITTED.append(self.out)
+            if old is not None:
+                _remove(old)
+            self._release()
         return self.out
+
+    def _move_into_place(self) -> Path | None:
+        """Move a previous ``out`` aside and the new folder to ``out``; returns where the
+        previous one went. On failure the previous one is moved back (OutputError)."""
+        assert self.tmp is not None
+        old = _aside(self.out) if os.path.lexists(self.out) else None
+        try:
+            if old is not None:
+                os.replace(self.out, old)
+            os.replace(self.tmp, self.out)
+        except OSError as exc:
+            where = "is unchanged"
+            if old is not None and os.path.lexists(old):
+                try:
+                    os.replace(old, self.out)
+                except OSError:
+                    where = f"is in {str(old)!r}"
+            raise OutputError(
+                f"--out {str(self.out)!r}: the new output cannot be moved into place "
+                f"({exc.strerror or exc}); the previous output {where}"
+            ) from exc
+        return old

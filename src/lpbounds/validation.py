@@ -21,6 +21,8 @@ accepted dtype (model builders hand over arrays of hundreds of megabytes).
 from __future__ import annotations
 
 import numbers
+import os
+import sys
 from collections.abc import Iterable
 from typing import Any
 
@@ -32,6 +34,7 @@ __all__ = [
     "MAX_VALUE_SCALE",
     "as_array",
     "as_float_array",
+    "check_allocation",
     "check_array",
     "check_bool",
     "check_choice",
@@ -47,6 +50,7 @@ __all__ = [
     "entry",
     "first_index",
     "is_int",
+    "physical_memory",
 ]
 
 #: Largest accepted scale of a value function, ``max|R| / (1 - discount)`` (the largest
@@ -375,3 +379,42 @@ def check_formulation_inputs(mdp: Any, partition: Any = _NO_PARTITION, **arrays:
                 raise ValidationError(f"{key} must hold real numbers; got dtype {value.dtype}")
             continue
         check_array(key, value, finite=False)
+
+
+# ---------------------------------------------------------------------- sizes
+def physical_memory() -> int | None:
+    """This machine's physical memory in bytes (``SC_PHYS_PAGES * SC_PAGE_SIZE``); None
+    where the platform does not tell."""
+    try:
+        pages, size = os.sysconf("SC_PHYS_PAGES"), os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+    return int(pages) * int(size) if pages > 0 and size > 0 else None
+
+
+def check_allocation(name: str, n_bytes: int, what: str) -> None:
+    """Refuse, before anything is allocated, arrays of ``n_bytes`` in all that do not fit
+    in this machine's memory (:func:`physical_memory`; without it, NumPy's limit of
+    ``sys.maxsize`` bytes per array).
+
+    Parameters
+    ----------
+    name : str
+        The sizes the arrays follow from, as the message names them (``"[model] n_states
+        = 10000000000 with n_actions = 3, branching = 4"``).
+    n_bytes : int
+        Bytes the arrays need (a Python int: no overflow).
+    what : str
+        The arrays (``"the successors, probabilities and rewards"``).
+    """
+    memory = physical_memory()
+    limit = sys.maxsize if memory is None else min(memory, sys.maxsize)
+    if n_bytes > limit:
+        have = (
+            f"this machine has {memory:,} bytes ({memory / 2**30:.3g} GiB) of memory"
+            if memory is not None
+            else f"NumPy allocates at most {limit:,} bytes"
+        )
+        raise ValidationError(
+            f"{name}: {what} need {n_bytes:,} bytes ({n_bytes / 2**30:.3g} GiB) but {have}"
+        )

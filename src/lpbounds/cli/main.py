@@ -16,6 +16,7 @@ import sys
 from collections.abc import Sequence
 
 from ..errors import LPBoundsError, OutputError, SolverNotInstalledError, ValidationError
+from ..outputs import committed_outputs
 from ._common import add_verbosity_options, configure_output
 
 #: Subcommand modules, in the order ``lpbounds --help`` lists them.
@@ -27,15 +28,17 @@ EXIT_FAILED = 1
 #: A usage or input error: bad arguments, an invalid or unreadable model, an output that
 #: cannot be written (checked before any computation) or is locked by another run.
 EXIT_USAGE = 2
-#: Interrupted (Ctrl-C): outputs are as they were before the run.
+#: Interrupted (Ctrl-C) before the output folder was renamed into place: outputs are as
+#: they were before the run. A Ctrl-C after that rename ends a completed run (0).
 EXIT_INTERRUPTED = 130
 
 EXIT_CODES: dict[int, str] = {
-    EXIT_OK: "success",
+    EXIT_OK: "success (also a Ctrl-C once the output folder is in place: it is complete)",
     EXIT_FAILED: "a computation failed (solver error, no convergence, inconsistent results)",
     EXIT_USAGE: "usage or input error: bad arguments, invalid or unreadable model file, "
     "output not writable or locked (checked before any computation)",
-    EXIT_INTERRUPTED: "interrupted (Ctrl-C); earlier outputs are left as they were",
+    EXIT_INTERRUPTED: "interrupted (Ctrl-C) before the output folder was in place; earlier "
+    "outputs are left as they were",
 }
 
 EPILOG = "exit status:\n" + "\n".join(f"  {code:<4} {text}" for code, text in EXIT_CODES.items())
@@ -83,9 +86,22 @@ def _one_line(exc: BaseException) -> str:
     return text or type(exc).__name__
 
 
+def interrupted(command: str, mark: int = 0) -> int:
+    """Report a Ctrl-C; its exit status. After the command committed its output folder
+    (:func:`lpbounds.outputs.committed_outputs` grew past ``mark``) the run is complete:
+    0, with a note naming the folder; before, 130 (the outputs are as they were)."""
+    done = committed_outputs()[mark:]
+    if done:
+        print(f"{command}: interrupted after {str(done[-1])!r} was complete", file=sys.stderr)
+        return EXIT_OK
+    print(f"{command}: interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (errors print one clear line)."""
     command = "lpbounds"
+    mark = len(committed_outputs())
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -97,8 +113,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         with configure_output(quiet=args.quiet, verbose=args.verbose):
             return int(args.func(args) or 0)
     except KeyboardInterrupt:
-        print(f"{command}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return interrupted(command, mark)
     except (LPBoundsError, OSError) as exc:
         print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
         return exit_status(exc)
@@ -110,7 +125,7 @@ def entry() -> None:
     A Ctrl-C that arrives once :func:`main` has returned (its output is complete by then)
     must not kill the interpreter by signal during shutdown (exit status -2, and possibly a
     traceback): SIGINT is ignored from the moment :func:`main` returns, and one arriving
-    in between is still reported as an interruption (130).
+    in between is still reported as an interruption (130, or 0 after a commit).
     """
     try:
         try:
@@ -118,8 +133,7 @@ def entry() -> None:
         finally:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
     except KeyboardInterrupt:
-        print("lpbounds: interrupted", file=sys.stderr)
-        code = EXIT_INTERRUPTED
+        code = interrupted("lpbounds")
     sys.exit(code)
 
 
