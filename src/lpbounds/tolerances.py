@@ -127,3 +127,42 @@ def error_bound(residual: float, values_absmax: float, modulus: float) -> float:
     slack = ROUNDING_ULPS * float(np.finfo(np.float64).eps) * max(1.0, float(values_absmax))
     return (float(residual) + slack) / (1.0 - float(modulus))
 
+
+# ---------------------------------------------------------------------- LP scaling
+#: The band of ``max|b|`` (the rows' right-hand sides: the rewards) and of ``max|c|`` (the
+#: cost) in which an LP of a discounted MDP is handed to the solver exactly as built;
+#: outside it, ``b`` and ``c`` are each multiplied by a power of two (exact in binary
+#: floating point) so that the largest entry lies in [1, 2), and the point and duals are
+#: scaled back (:meth:`lpbounds.formulations.base.Formulation.solve`). Why these ends
+#: (measured on 30- and 40-state garnets at discounts 0.9-0.9999, docs/benchmarks.md "LP
+#: data scale"): below, the solvers' absolute tolerances (HiGHS' feasibility tolerance
+#: 1e-7, Clarabel's 1e-8) meet the certificate's ``accuracy * max|R|`` (1e-6 relative):
+#: HiGHS turns INACCURATE from max|R| ~ 1e-6 (relative error 0.05-0.08), Clarabel from
+#: ~ 1e-3, and costs alike; 2**-10 (9.8e-4) is at Clarabel's edge. Above: HiGHS treats
+#: 1e20 as infinity (passModel fails) and Clarabel calls feasible LPs infeasible or
+#: unbounded once the values reach ~ 1e9 (see LP_VALUE_SCALE_MAX); 2**20 (1.05e6) keeps
+#: the rows well away from both. The band contains every shipped model (patrol rewards
+#: 1-100, garnets 0-1, unit costs), whose results are therefore bit for bit those of an
+#: unscaled solve.
+LP_DATA_BAND: tuple[float, float] = (2.0**-10, 2.0**20)
+
+#: The largest value scale ``max|b| / (1 - lambda)`` (and dual scale ``max|c| / (1 -
+#: lambda)``) left unscaled, whatever ``max|b|``: Clarabel's false "infeasible"/"unbounded"
+#: starts at value scales of about 1e9 (2**30) in the measurements of LP_DATA_BAND
+#: (rewards 1e9 at discount 0.9, 1e7 at 0.99, 1e5 at 0.9999); 2**26 (6.7e7) leaves a
+#: factor 16 below that. The shipped models are far below it (patrol: 1e3). Scaling down
+#: is not free for Clarabel: below that edge its certified accuracy at discounts >= 0.99
+#: grows with the value scale (at 0.99 and rewards 1e6, value scale 1e8: 4 of 5 garnets
+#: OPTIMAL as built, 2 of 5 scaled, the others INACCURATE with valid brackets), so the cap
+#: is not set lower than the safety margin needs.
+LP_VALUE_SCALE_MAX: float = 2.0**26
+
+#: The largest objective ``sum|c| max|x|`` and dual total ``sum(c) / (1 - lambda)`` an LP
+#: of a discounted MDP may have (else a ValidationError before the solver): scaling gives
+#: the solver unit data, but the result is reported in the model's units, and the
+#: certificate's objective bracket and weak-duality bound sum terms ``|c_i x_i|`` and
+#: ``y_r |b_r|`` whose totals are bounded by these, inflated by rounding allowances of
+#: ``(1 + n eps)`` and a few such terms added together. 2**1016 (7e305) leaves a factor 256
+#: below float64's largest number (1.8e308) for that; a cost of 1e300 on a small model
+#: (objective ~ 1e302) is accepted.
+LP_OBJECTIVE_MAX: float = 2.0**1016

@@ -50,6 +50,22 @@ def _check_basis(basis: Any, n: int) -> sp.csr_matrix:
     return phi
 
 
+def _strictly_feasible_direction(a: sp.csr_matrix) -> bool:
+    """Whether ``A 1 > 0`` holds exactly, shown in floating point.
+
+    The computed ``d = fl(A 1)`` is within ``(k + 1) eps (|A| 1)`` of the exact one (``k``
+    the most entries of a row, any summation order), so ``d`` above twice that proves every
+    exact row positive, and then ``t 1`` is feasible for every right-hand side once ``t``
+    is large: true for a soft- or hard-aggregation basis (``Phi 1 = 1``: rows ``1 - lambda``).
+    """
+    if a.shape[0] == 0:
+        return True
+    ones = np.ones(a.shape[1])
+    k = int(np.diff(a.indptr).max(initial=0))
+    margin = 2.0 * (k + 1) * float(np.finfo(np.float64).eps) * (abs(a) @ ones)
+    return bool(((a @ ones) > margin).all())
+
+
 class ALP(Formulation):
     r"""The approximate LP ``min c' Phi r  s.t.  Phi r >= R_u + lambda P_u Phi r`` (eq. 10).
 
@@ -92,6 +108,14 @@ class ALP(Formulation):
     name = "ALP"
     #: only the upper side is judged: the point is not a fixed point (see the notes)
     upper_side_only = True
+    #: Not in general (a basis without a Bellman-feasible direction: the LP is infeasible);
+    #: an instance whose ``A 1 > 0`` is proved (soft or hard aggregation) sets it True.
+    feasible_by_construction = False
+    bounded_by_construction = True
+    boundedness_reason = (
+        "every feasible Phi r satisfies the Bellman inequalities, so Phi r >= V* (Lemma 1), "
+        "and the cost is >= 0: c'Phi r >= c'V*"
+    )
 
     def __init__(self, mdp: FiniteMDP, basis: Any, cost: Any = None) -> None:
         check_formulation_inputs(mdp, cost=cost, basis=basis)
@@ -107,6 +131,15 @@ class ALP(Formulation):
             variables=[("r", self.basis.shape[1])],
             groups=[("bellman", b.size)],
         )
+        if _strictly_feasible_direction(self.A):
+            self.feasible_by_construction = True
+            self.feasibility_reason = (
+                "its rows at r = 1 (all weights one) are > 0 beyond rounding, so r = t 1 "
+                "satisfies every row for t large enough"
+            )
+
+    def _discount(self) -> float:
+        return float(self.rows.discount)
 
     @property
     def r(self) -> cp.Variable:

@@ -23,6 +23,15 @@ computes itself from the returned point:
   ``gap = |c'x - b'y|`` for the returned duals ``y >= 0`` (cvxpy's sign convention for
   ``>=`` rows), reported beside it.
 
+Nor is "infeasible" or "unbounded" taken from the solver where the structure excludes it:
+each formulation says, as class data, whether it is feasible and bounded by construction
+(:attr:`Formulation.feasible_by_construction`, :attr:`Formulation.bounded_by_construction`,
+with the reason); such a claim is the solver's failure (SOLVER_ERROR, or the returned
+point judged by its certificate), noted in ``extra["solver_claim"]`` and
+``extra["message"]``. An LP of a discounted MDP whose rewards or cost lie outside
+:data:`~lpbounds.tolerances.LP_DATA_BAND` is scaled by powers of two before the solver sees
+it, and its point and duals scaled back exactly (:meth:`Formulation.solve`, "Scaling").
+
 Sign conventions: ``y_r >= 0`` is the multiplier of row ``r`` of ``A x >= b``; at an
 optimum ``A' y = c`` (stationarity), ``y' (A x - b) = 0`` (complementarity). For Bellman
 rows, the duals spread over (state, action) pairs are the paper's ``mu_u^i(x)``.
@@ -44,10 +53,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._quiet import silence_highs_banner, solver_output
-from ..certificate import Certificate, dual_objective_bound
+from ..certificate import Certificate, contraction_modulus, dual_objective_bound
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
 from ..status import Status
-from ..tolerances import LP_CERT_RTOL
+from ..tolerances import LP_CERT_RTOL, LP_DATA_BAND, LP_OBJECTIVE_MAX, LP_VALUE_SCALE_MAX
 from ..validation import as_float_array, check_bool, check_int, check_real
 from ._highs import STATUS_MAP as HIGHS_STATUS
 from ._highs import CvxpyHighs, pass_lp, quiet_highs, run_highs, set_options
@@ -221,7 +230,10 @@ class LPResult:
     gap : float
         ``|c'x - b'y|``.
     extra : dict
-        Formulation-specific data (e.g. IB's blocks); ``extra["message"]`` on failure.
+        Formulation-specific data (e.g. IB's blocks); ``extra["message"]`` on failure;
+        ``extra["solver_claim"]`` ("infeasible" or "unbounded") where the solver claimed
+        what the formulation's structure excludes; ``extra["lp_scaling"]`` (``{"b": kb,
+        "c": kc}``) where the solver saw ``b 2**-kb`` and ``c 2**-kc``.
     modified : bool
         True for a solve with ``extra_constraints``: then ``lower_values``/``upper_values``
         and ``certificate`` are about the ORIGINAL problem's optimum (still valid, see
@@ -337,6 +349,58 @@ class _Run:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class _Scaling:
+    """The powers of two an LP is scaled by before the solver sees it.
+
+    The solver gets ``min (c 2**-kc)'x'  s.t.  A x' >= b 2**-kb``, whose optimum is
+    ``x' = x* 2**-kb`` with duals ``y' = y* 2**-kc``: :meth:`unscale` multiplies them back.
+    Multiplying by a power of two is exact in binary floating point (barring overflow and
+    underflow, which only an entry far outside the others' range meets; the certificate,
+    computed on the original rows from the unscaled point, judges the result either way).
+    """
+
+    kb: int = 0
+    kc: int = 0
+
+    @property
+    def applied(self) -> bool:
+        """True when the solver sees data other than the formulation's own."""
+        return bool(self.kb or self.kc)
+
+    def data(self, form: Formulation) -> tuple[np.ndarray, np.ndarray]:
+        """``(b, c)`` as the solver sees them (the formulation's own arrays when 0)."""
+        b = form.b if not self.kb else np.ldexp(form.b, -self.kb)
+        c = form.c if not self.kc else np.ldexp(form.c, -self.kc)
+        return b, c
+
+    def unscale(self, run: _Run) -> None:
+        """The run's point and duals back in the formulation's units (in place)."""
+        if run.x is not None and self.kb:
+            run.x = np.ldexp(run.x, self.kb)
+        if run.y is not None and self.kc:
+            run.y = np.ldexp(run.y, self.kc)
+
+
+_NO_SCALING = _Scaling()
+
+
+def _scale_exponent(absmax: float, discount: float) -> int:
+    """0 when ``absmax`` (``max|b|`` or ``max|c|``) is ordinary, else the power of two that
+    brings it into [1, 2).
+
+    Ordinary: within :data:`~lpbounds.tolerances.LP_DATA_BAND` and with ``absmax / (1 -
+    discount)`` (the scale of the values, or of the duals) at most
+    :data:`~lpbounds.tolerances.LP_VALUE_SCALE_MAX`.
+    """
+    if not (np.isfinite(absmax) and absmax > 0.0):
+        return 0
+    lo, hi = LP_DATA_BAND
+    if lo <= absmax <= hi and absmax <= LP_VALUE_SCALE_MAX * (1.0 - discount):
+        return 0
+    return int(np.frexp(absmax)[1]) - 1
+
+
 #: The constraint types ``extra_constraints`` accepts: what ``<=``, ``>=`` and ``==`` build.
 _EXTRA_TYPES = (cp.constraints.Inequality, cp.constraints.Equality)
 
@@ -381,8 +445,11 @@ class Backend:
 
     :meth:`run` calls the solver on the formulation's LP and returns what came back as a
     :class:`_Run` (status in :class:`~lpbounds.status.Status`, the point ``x`` and the duals
-    ``y >= 0`` of the rows of ``A x >= b``, or ``None``); :meth:`Formulation.solve` judges it
-    the same way whatever the backend. The backends are the values of :data:`BACKENDS`.
+    ``y >= 0`` of the rows of ``A x >= b``, or ``None``, in the units the solver saw: the
+    data scaled by ``scaling``); :meth:`Formulation.solve` scales them back and judges them
+    the same way whatever the backend. An exception of the solver is a SOLVER_ERROR run,
+    never raised (:meth:`Formulation.solve` raises only if asked to). The backends are the
+    values of :data:`BACKENDS`.
     """
 
     name: str = ""
@@ -395,8 +462,15 @@ class Backend:
         options: dict[str, Any],
         problem: cp.Problem,
         basis: Any = None,
+        scaling: _Scaling = _NO_SCALING,
     ) -> _Run:
         raise NotImplementedError
+
+
+def _crashed(solver: str, options: dict[str, Any], exc: BaseException, seconds: float) -> _Run:
+    """The run of a solver that raised ``exc``: SOLVER_ERROR, the exception named."""
+    msg = f"{solver} raised {type(exc).__name__}: {exc}"
+    return _Run(solver, options, Status.SOLVER_ERROR, msg, None, None, 0.0, seconds, None)
 
 
 class CvxpyBackend(Backend):
@@ -420,8 +494,10 @@ class CvxpyBackend(Backend):
         options: dict[str, Any],
         problem: cp.Problem,
         basis: Any = None,
+        scaling: _Scaling = _NO_SCALING,
     ) -> _Run:
-        """Call the solver through cvxpy; map its status; keep any point it returned."""
+        """Call the solver through cvxpy on ``problem`` (already scaled: ``scaling`` is only
+        a record here); map its status; keep any point it returned."""
         adapter = (
             form._highs_adapter() if solver == "HIGHS" and not problem.is_mixed_integer() else None
         )
@@ -439,13 +515,13 @@ class CvxpyBackend(Backend):
             msg = f"cvxpy or {solver} rejected the problem or an option: {exc}"
             return _Run(solver, options, Status.SOLVER_ERROR, msg, None, None, 0.0,
                         time.perf_counter() - t0, None)  # fmt: skip
+        except Exception as exc:  # a solver's crash on a well-formed LP: a result, not an abort
+            return _crashed(solver, options, exc, time.perf_counter() - t0)
         status = _STATUS.get(problem.status, Status.SOLVER_ERROR)
         if adapter is not None and status is Status.LIMIT:
             status = HIGHS_STATUS.get(adapter.model_status, status)
-        x = form.point()
-        y = form._stacked_duals()
-        if x is None or not status.has_point:
-            x = None
+        x = form.point()  # kept whatever the status: solve() decides what it is worth
+        y = form._stacked_duals(problem.constraints[: len(form.constraints)])
         stats = problem.solver_stats
         compile_s = float(getattr(problem, "compilation_time", None) or 0.0)
         solve_s = float(stats.solve_time) if stats and stats.solve_time else 0.0
@@ -495,25 +571,28 @@ class HighspyBackend(Backend):
         options: dict[str, Any],
         problem: cp.Problem,
         basis: Any = None,
+        scaling: _Scaling = _NO_SCALING,
     ) -> _Run:
         import highspy
 
         t0 = time.perf_counter()
         with solver_output(verbose) as verbose:
             h = quiet_highs()
-            set_options(h, options, verbose)
-            pass_lp(h, form.A, form.b, form.c)
-            if basis is not None and h.setBasis(basis) == highspy.HighsStatus.kError:
-                raise SolverError(f"{form.name}: HiGHS rejected the starting basis")
-            compile_s = time.perf_counter() - t0
-            hr = run_highs(h)
-        x = hr.x if hr.status.has_point else None
+            set_options(h, options, verbose)  # a bad option is the caller's error: raised
+            try:
+                pass_lp(h, form.A, *scaling.data(form))
+                if basis is not None and h.setBasis(basis) == highspy.HighsStatus.kError:
+                    raise SolverError(f"{form.name}: HiGHS rejected the starting basis")
+                compile_s = time.perf_counter() - t0
+                hr = run_highs(h)
+            except Exception as exc:  # HiGHS' rejection or crash: a result, not an abort
+                return _crashed("HIGHS", options, exc, time.perf_counter() - t0)
         return _Run(
             solver="HIGHS",
             options=options,
             status=hr.status,
             message=hr.model_status,
-            x=x,
+            x=hr.x,
             y=None if hr.y is None else np.maximum(hr.y, 0.0),
             compile_seconds=compile_s,
             solve_seconds=hr.seconds,
@@ -567,6 +646,21 @@ class Formulation:
     #: Judge only the upper side of the certificate (formulations whose point dominates,
     #: rather than equals, the certified fixed point: ALP, LLP).
     upper_side_only: bool = False
+    #: The LP has a feasible point whatever its data (within validation): a solver's
+    #: "infeasible" is then impossible and is reported as that solver's failure
+    #: (:meth:`solve`). False here: a general LP may be infeasible.
+    feasible_by_construction: bool = False
+    #: Why, for the result's note (a sentence; empty where not feasible by construction).
+    feasibility_reason: str = ""
+    #: The LP's objective is bounded below on its feasible set whatever its data: a
+    #: solver's "unbounded" is impossible, also with extra constraints (they only shrink
+    #: the feasible set).
+    bounded_by_construction: bool = False
+    #: Why (a sentence).
+    boundedness_reason: str = ""
+    #: Private switch: False hands the solver ``(A, b, c)`` exactly as built even outside
+    #: :data:`~lpbounds.tolerances.LP_DATA_BAND` (for measuring what scaling does).
+    _scaling: bool = True
 
     def __init__(
         self,
@@ -595,11 +689,17 @@ class Formulation:
             k: cp.Variable(s.stop - s.start, name=k) for k, s in self.variable_columns.items()
         }
         self.constraints = {k: self._group(s) for k, s in self.constraint_rows.items()}
-        objective = _add([self.c[s] @ self.variables[k] for k, s in self.variable_columns.items()])
-        self.problem = cp.Problem(cp.Minimize(objective), list(self.constraints.values()))
+        self.problem = cp.Problem(
+            cp.Minimize(self._objective(self.c)), list(self.constraints.values())
+        )
 
-    def _group(self, rows: slice) -> cp.Constraint:
-        """``sum_k A[rows, cols_k] @ var_k >= b[rows]``: one sparse vector constraint."""
+    def _objective(self, c: np.ndarray) -> Any:
+        """``sum_k c[cols_k] @ var_k``."""
+        return _add([c[s] @ self.variables[k] for k, s in self.variable_columns.items()])
+
+    def _group(self, rows: slice, b: np.ndarray | None = None) -> cp.Constraint:
+        """``sum_k A[rows, cols_k] @ var_k >= b[rows]``: one sparse vector constraint
+        (``b`` defaults to :attr:`b`; a scaled copy for :meth:`_scaled_problem`)."""
         n_rows, n_cols = self.A.shape
         a_g = self.A if rows.stop - rows.start == n_rows else self.A[rows]
         terms = []
@@ -610,7 +710,7 @@ class Formulation:
         if not terms:  # an all-zero group: keep it (0 >= b), on the first variable
             k, cols = next(iter(self.variable_columns.items()))
             terms.append(a_g[:, cols] @ self.variables[k])
-        return _add(terms) >= self.b[rows]
+        return _add(terms) >= (self.b if b is None else b)[rows]
 
     # ------------------------------------------------------------------ interface
     def _interpret(
@@ -659,6 +759,127 @@ class Formulation:
         excess = (objective - bracket[0]) * (1.0 - cert.modulus)
         return bool(excess <= tol * float(self.c.sum()))
 
+    # ------------------------------------------------------------------ scale and claims
+    def _discount(self) -> float | None:
+        """``lambda`` of the discounted MDP behind this LP; ``None`` (here) for an LP that is
+        not one, which is then handed to the solver as built (no scaling, no checks)."""
+        return None
+
+    def _value_bound(self) -> float | None:
+        """A bound on ``max|x|`` at the optimum, ``None`` where none is known (here)."""
+        return None
+
+    def _check_representable(self) -> None:
+        """Refuse, before any solver, an LP whose objective or duals overflow float64.
+
+        Scaling brings ``b`` and ``c`` to unit scale for the solver, but the result is
+        reported in the formulation's units: ``|c'x| <= sum|c| max|x|`` and the duals sum
+        to at most ``sum(c) / (1 - lambda)`` (the occupation measure of ``c``). Either
+        beyond :data:`~lpbounds.tolerances.LP_OBJECTIVE_MAX` cannot be represented (with
+        the certificate's sums), scaled or not. (The values themselves are within
+        :data:`~lpbounds.validation.MAX_VALUE_SCALE`: the MDP refuses larger ones.)
+
+        Raises
+        ------
+        ValidationError
+            Naming the cost's total and the bound it breaks.
+        """
+        lam, vb = self._discount(), self._value_bound()
+        if lam is None or vb is None:
+            return
+        csum = float(np.abs(self.c).sum())
+        if not np.isfinite(csum):
+            bad = "the cost's sum overflows float64"
+        elif vb > 0 and csum > LP_OBJECTIVE_MAX / vb:
+            bad = (
+                f"the objective reaches sum(c) * max|x| = {csum:.3g} * {vb:.3g} (max|x| <= "
+                "max|R| / (1 - lambda))"
+            )
+        elif csum > LP_OBJECTIVE_MAX * (1.0 - lam):
+            bad = f"the duals reach sum(c) / (1 - lambda) = {csum:.3g} / {1.0 - lam:.3g}"
+        else:
+            return
+        raise ValidationError(
+            f"{self.name}: {bad}, beyond {LP_OBJECTIVE_MAX:.1e}: its objective and duals "
+            "cannot be represented in float64 even after scaling; rescale the cost (a "
+            "positive multiple of the cost gives the same optimal point)"
+        )
+
+    def _rows_contract(self) -> bool:
+        """Whether the row system behind the structural flags (``self.rows``, where the
+        formulation has one) contracts, ``kappa = lambda max_r sum_l p_rl < 1``: rows may sum
+        to ``1 + 1e-9`` (validation's tolerance), so a discount within 1e-9 of 1 can break
+        the argument. Checked only when a solver makes a claim."""
+        rows = getattr(self, "rows", None)
+        if rows is None:
+            return True
+        try:
+            contraction_modulus(rows)
+        except ValidationError:
+            return False
+        return True
+
+    def _scaling_of(self, extras: list[cp.Constraint]) -> _Scaling:
+        """The powers of two ``b`` and ``c`` are scaled by for the solver (each separately).
+
+        None (``_NO_SCALING``) for an LP that is not of a discounted MDP, with extra
+        constraints (written by the user in the formulation's units), when the private
+        switch :attr:`_scaling` is off, and when the data is ordinary
+        (:func:`_scale_exponent`): such LPs reach the solver bit for bit as built.
+        """
+        lam = self._discount()
+        if extras or lam is None or not self._scaling:
+            return _NO_SCALING
+        kb = _scale_exponent(float(np.abs(self.b).max(initial=0.0)), lam)
+        kc = _scale_exponent(float(np.abs(self.c).max(initial=0.0)), lam)
+        return _Scaling(kb, kc)
+
+    def _scaled_problem(self, scaling: _Scaling) -> cp.Problem:
+        """:attr:`problem` on the same variables with ``b`` and ``c`` scaled (built once per
+        scaling and data: cvxpy then compiles it once)."""
+        key = (scaling, id(self.A), id(self.b), id(self.c))
+        cached = getattr(self, "_scaled_cache", None)
+        if cached is None or cached[0] != key:
+            b, c = scaling.data(self)
+            groups = [self._group(rows, b) for rows in self.constraint_rows.values()]
+            cached = self._scaled_cache = (key, cp.Problem(cp.Minimize(self._objective(c)), groups))
+        return cached[1]
+
+    def _store_values(self, x: np.ndarray, y_raw: np.ndarray | None) -> None:
+        """After a scaled cvxpy solve: the variables and the groups' duals in this
+        formulation's units, as after an unscaled one (``form.V.value``, ...)."""
+        for k, cols in self.variable_columns.items():
+            self.variables[k].value = x[cols]
+        if y_raw is not None:
+            for k, rows in self.constraint_rows.items():
+                self.constraints[k].save_dual_value(y_raw[rows])
+
+    def _judge_claim(self, run: _Run, modified: bool) -> None:
+        """A solver's "infeasible" or "unbounded" where the structure excludes it (in place).
+
+        Infeasible needs :attr:`feasible_by_construction` (and no extra constraints, which
+        may make any LP infeasible); unbounded needs :attr:`bounded_by_construction`. Such a
+        claim is the solver's failure: with a point, the point is judged by its certificate
+        like any other (status OPTIMAL or INACCURATE); without one, SOLVER_ERROR. The
+        claim is kept in ``extra["solver_claim"]`` and the reason in ``extra["message"]``.
+        """
+        if run.status is Status.INFEASIBLE and self.feasible_by_construction and not modified:
+            claim, reason = "infeasible", self.feasibility_reason
+        elif run.status is Status.UNBOUNDED and self.bounded_by_construction:
+            claim, reason = "unbounded", self.boundedness_reason
+        else:
+            return
+        if not self._rows_contract():
+            return  # the structural argument needs kappa < 1; without it the claim may hold
+        note = (
+            f"{run.solver} claimed this {self.name} is {claim} (solver status "
+            f"{run.message!r}), which is impossible: {reason}; counted as a failure of "
+            f"{run.solver}"
+        )
+        run.status = Status.INACCURATE if run.x is not None else Status.SOLVER_ERROR
+        run.message = note
+        run.extra.update(solver_claim=claim, message=note)
+
     # ------------------------------------------------------------------ values
     def point(self) -> np.ndarray | None:
         """The variables' current values stacked as ``x`` (``None`` before a solve)."""
@@ -667,9 +888,10 @@ class Formulation:
             return None
         return np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts])
 
-    def _stacked_duals(self) -> np.ndarray | None:
+    def _stacked_duals(self, constraints: Any = None) -> np.ndarray | None:
+        """The duals of ``constraints`` (default: the groups) stacked in row order."""
         parts = []
-        for con in self.constraints.values():
+        for con in self.constraints.values() if constraints is None else constraints:
             if con.dual_value is None:
                 return None
             parts.append(np.asarray(con.dual_value, dtype=np.float64).ravel())
@@ -885,6 +1107,27 @@ class Formulation:
         Otherwise INACCURATE (a limit status is kept). ``dual_residual`` is ``||r||_inf``
         and ``gap`` is ``|c'x - D|``; ``group_duals`` and ``mu`` are the modified LP's
         duals of the original groups, ``extra_duals`` those of the added constraints.
+
+        **Scaling.** For an LP of a discounted MDP (ELP, RLP, SLP, IB, UBLP, LBLP, ALP, LLP)
+        without extra constraints, ``b`` (the rewards) and ``c`` are each multiplied by a
+        power of two, ``2**-kb`` and ``2**-kc``, so that the largest entry lies in [1, 2),
+        unless it already lies in :data:`~lpbounds.tolerances.LP_DATA_BAND` with a value
+        (or dual) scale ``max / (1 - lambda)`` of at most
+        :data:`~lpbounds.tolerances.LP_VALUE_SCALE_MAX`: then the LP reaches the solver bit
+        for bit as built. The solver's point and duals are multiplied back by ``2**kb`` and
+        ``2**kc`` (exact in binary floating point) and everything above -- certificate,
+        residuals, status -- is computed from them on the ORIGINAL rows. What cannot be
+        represented even so (an objective or dual total beyond
+        :data:`~lpbounds.tolerances.LP_OBJECTIVE_MAX`) is a ValidationError before the
+        solver.
+
+        **Solver claims.** A solver's "infeasible" on a formulation that is
+        :attr:`feasible_by_construction` (without extra constraints), or "unbounded" on one
+        that is :attr:`bounded_by_construction`, is impossible: the status is SOLVER_ERROR
+        (or, where the solver returned a point anyway, that point's certified status), with
+        the claim and the reason in ``extra``. An exception raised by the solver is a
+        SOLVER_ERROR result; ``raise_on_failure`` decides whether it is raised as
+        :class:`~lpbounds.errors.SolverError`.
         """
         acc = _check_accuracy(accuracy)
         raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
@@ -893,18 +1136,14 @@ class Formulation:
         extras = self._check_extras(extra_constraints)
         name = resolve_solver(solver)
         route = self._backend(backend, name, warm_start, extras)
-        problem = (
-            self.problem
-            if not extras
-            else cp.Problem(self.problem.objective, self.problem.constraints + extras)
-        )
+        self._check_representable()
         basis, warm_extra = None, {}
         if warm_start is not None:
             t0 = time.perf_counter()
             basis = self.policy_basis()
             warm_extra = {"warm_start": warm_start, "warm_start_seconds": time.perf_counter() - t0}
             solver_options = {"solver": "simplex", **solver_options}
-        run = route.run(self, name, verbose, solver_options, problem, basis)
+        run = self._run(route, name, verbose, solver_options, extras, basis)
         run.extra.update(warm_extra)
         if run.x is None:
             return self._failed(run, acc, raise_on_failure)
@@ -923,6 +1162,35 @@ class Formulation:
                 f"{result.dual_residual:.3e}, gap {result.gap:.3e}"
             )
         return result
+
+    def _run(
+        self,
+        route: Backend,
+        solver: str,
+        verbose: bool,
+        options: dict[str, Any],
+        extras: list[cp.Constraint],
+        basis: Any,
+    ) -> _Run:
+        """One run of the solver on the (scaled) LP, its point and duals in this LP's units
+        and its claim judged against the structure (:meth:`_judge_claim`); ``x`` is
+        ``None`` unless the status keeps a point."""
+        scaling = self._scaling_of(extras)
+        if extras:
+            problem = cp.Problem(self.problem.objective, self.problem.constraints + extras)
+        else:
+            problem = self._scaled_problem(scaling) if scaling.applied else self.problem
+        run = route.run(self, solver, verbose, options, problem, basis, scaling)
+        if scaling.applied:
+            raw = None if route.name != "cvxpy" else self._stacked_duals(problem.constraints)
+            scaling.unscale(run)
+            if route.name == "cvxpy" and run.x is not None:
+                self._store_values(run.x, None if raw is None else np.ldexp(raw, scaling.kc))
+            run.extra["lp_scaling"] = {"b": scaling.kb, "c": scaling.kc}
+        self._judge_claim(run, bool(extras))
+        if not run.status.has_point:
+            run.x = None
+        return run
 
     def _judge(self, run: _Run, accuracy: float) -> LPResult:
         """The certified result of a run that returned a point."""

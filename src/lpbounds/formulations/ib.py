@@ -18,7 +18,7 @@ from ..errors import ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
 from ..rows import BellmanRows
-from ..validation import check_formulation_inputs
+from ..validation import check_allocation, check_formulation_inputs
 from .base import Formulation, check_cost
 from .rows_lp import RowsLP
 
@@ -47,9 +47,17 @@ class IB(RowsLP):
     mdp : FiniteMDP
     partition : Partition
     L : int
-        Number of blocks, ``>= 1``.
+        Number of blocks, ``>= 1``. An ``L`` whose ``L`` copies of the rows and LP matrix
+        would not fit in the machine's physical memory (a lower-bound estimate against
+        ``SC_PHYS_PAGES * SC_PAGE_SIZE``) is refused before anything is allocated.
     cost : array_like (n_states,), optional
         ``c(x) >= 0`` (default ones); every block gets the cost ``c-bar``.
+
+    Raises
+    ------
+    ValidationError
+        For an ``L`` that is not an integer ``>= 1``, or too large for the memory (the
+        message gives the bytes needed and available).
 
     Attributes
     ----------
@@ -83,6 +91,7 @@ class IB(RowsLP):
         c = check_cost(cost, mdp.n_states)
         cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
         self.base_rows = BellmanRows.aggregate(mdp, partition, reduce="max")
+        _check_lift_size(self.L, self.base_rows)  # before anything of size L is allocated
         super().__init__(_cyclic_rows(self.base_rows, self.L), np.tile(cbar, self.L))
 
     def _variable_blocks(self) -> list[tuple[str, int]]:
@@ -122,6 +131,26 @@ class IB(RowsLP):
 
         v = solve_exact(self.base_rows, tol=tol).values
         return np.tile(v, (self.L, 1))
+
+
+def _check_lift_size(L: int, rows: BellmanRows) -> None:
+    """Refuse an ``L`` whose lifted rows cannot fit in this machine's memory.
+
+    The estimate is a lower bound on what IB holds at once: the ``L`` copies of the
+    rows as :func:`_cyclic_rows` builds them (int64 owner, block and targets, int32
+    action, float64 reward, and float64 probabilities unless shared by every row) and
+    the LP's constraint matrix (CSR: one float64 entry and int32 index per owner and per
+    target). Python integers: no overflow for any ``L``.
+    """
+    r, width = rows.targets.shape
+    per_row_probs = np.asarray(rows.probs).strides[0] != 0
+    per_row = 8 * 2 + 4 + 8 + 8 * width + (8 * width if per_row_probs else 0) + 12 * (1 + width)
+    check_allocation(
+        f"L = {L}",
+        L * r * per_row,
+        f"IB's {L} blocks of RLP's {r} rows ({L * r:,} rows, {L * rows.n_vars:,} variables:"
+        " the lifted rows and the LP's constraint matrix, at least)",
+    )
 
 
 def _cyclic_rows(rows: BellmanRows, L: int) -> BellmanRows:
@@ -208,6 +237,16 @@ class LLP(Formulation):
     #: LLP's ``v`` need not be ``v*`` (it dominates it): only its feasibility, the certified
     #: upper bound's distance from ``v``, is judged
     upper_side_only = True
+    feasible_by_construction = True
+    feasibility_reason = (
+        "the constant v = max(R)^+ / (1 - kappa) satisfies RLP's rows (they contract: "
+        "kappa = lambda max_r sum_l p_rl < 1), and z = A_pair v - R >= 0 is then its surplus"
+    )
+    bounded_by_construction = True
+    boundedness_reason = (
+        "the projection of its feasible set onto v is RLP's, so v >= v*, and z >= 0; with "
+        "c >= 0 and d >= 0 the objective is at least c-bar'v*"
+    )
 
     def __init__(self, mdp: FiniteMDP, partition: Partition, d: Any, cost: Any = None) -> None:
         check_formulation_inputs(mdp, partition, cost=cost, d=d)
@@ -276,6 +315,13 @@ class LLP(Formulation):
     def _certify(self, x: np.ndarray) -> Certificate:
         """The bracket on RLP's ``v*`` from LLP's ``v`` (LLP's optimal ``v`` dominates ``v*``)."""
         return certify(self.rows, x[: self._m])
+
+    def _discount(self) -> float:
+        return float(self.rows.discount)
+
+    def _value_bound(self) -> float:
+        """``3 max|R| / (1 - lambda)``: ``v``'s scale, and ``z = v - R - lambda P v``'s."""
+        return 3.0 * float(np.abs(self.b).max(initial=0.0)) / (1.0 - self._discount())
 
     def _bracket(
         self, cert: Certificate

@@ -42,6 +42,17 @@ class RowsLP(Formulation):
     variable_name = "v"
     #: The name of the constraint group (after the equation it implements).
     group_name = "bellman"
+    feasible_by_construction = True
+    feasibility_reason = (
+        "its Bellman rows contract (kappa = lambda max_r sum_l p_rl < 1), so the constant "
+        "v = max(R)^+ / (1 - kappa) satisfies every row"
+    )
+    bounded_by_construction = True
+    boundedness_reason = (
+        "every variable owns a Bellman row and the rows contract (kappa < 1), so every "
+        "feasible v dominates the least feasible point v* (Fact 1), and the cost is >= 0: "
+        "c'v >= c'v*"
+    )
 
     def __init__(self, rows: BellmanRows, cost: Any = None, name: str | None = None) -> None:
         self.rows = rows
@@ -68,6 +79,13 @@ class RowsLP(Formulation):
     def _certify(self, x: np.ndarray) -> Certificate:
         """The bracket on the exact optimum (the least feasible point) from ``x`` alone."""
         return certify(self.rows, x)
+
+    def _discount(self) -> float:
+        return float(self.rows.discount)
+
+    def _value_bound(self) -> float:
+        """``max|R| / (1 - lambda)``: ``|v*|`` is at most that (Fact 1)."""
+        return float(np.abs(self.rows.reward).max(initial=0.0)) / (1.0 - self._discount())
 
     def policy_basis(self) -> Any:
         """HiGHS' basis of the optimal policy, from exact DP (``solve(warm_start="policy")``).
