@@ -86,7 +86,7 @@ ps = post_decision_rows(mdp)
 r = lb.solve_exact(mdp)
 v = r.values.copy()
 n = ps.n_vars
-out = np.empty(n); arg = ps.new_arg(); w = ps.new_work(); nc = ps._chunks()
+out = np.empty(n); arg = ps.new_arg(); w = ps.new_work()
 act = r.policy.astype(np.int8)
 codes = ps.reward_codes if ps.reward_codes is not None else ps.reward
 imp = (ps.outcomes.nbytes + w.nbytes  # ps_expect: outcomes read, W written
@@ -96,24 +96,24 @@ pol = imp - arg.nbytes - (2 * ps.first.nbytes + 2 * codes.nbytes) // 3 + act.nby
 times = {}
 for k in sorted({1, many}):
     numba.set_num_threads(k)
-    times[f"max/{k}"] = best(lambda: ps._sweep_max(v, out, arg, nc, w=w), 15)
-    times[f"policy/{k}"] = best(lambda: ps._sweep_policy(act, v, out, nc, w=w), 15)
+    times[f"max/{k}"] = best(lambda: ps.sweep_max(v, out, arg, work=w), 15)
+    times[f"policy/{k}"] = best(lambda: ps.sweep_policy(act, v, out, work=w), 15)
     t = time.perf_counter(); ps._k().ps_expect(ps.outcomes, ps.probs, v, w)
     times[f"expect/{k}"] = best(lambda: ps._k().ps_expect(ps.outcomes, ps.probs, v, w), 15)
 numba.set_num_threads(many)
 solves = {}
 for name, fix in (("choice", None), ("one", 1), ("all", many)):
     import lpbounds.dp as dpm
-    orig = dpm._ThreadChoice.start
+    orig = dpm.ThreadChoice.start
     def fixed(self, kind, k=fix):
         self._set(min(k, self.many))
         return self.current
     if fix is not None:
-        dpm._ThreadChoice.start = fixed
+        dpm.ThreadChoice.start = fixed
     ts = []
     for _ in range(3):
         t = time.perf_counter(); lb.solve_exact(mdp); ts.append(time.perf_counter() - t)
-    dpm._ThreadChoice.start = orig
+    dpm.ThreadChoice.start = orig
     solves[name] = ts
 print(json.dumps({"bw": bw, "imp_bytes": imp, "pol_bytes": pol, "times": times, "n": n,
                   "n_post": ps.n_post, "solves": solves, "many": many,
@@ -169,7 +169,7 @@ policy's pick) over the pairs, 3 gathers of W per state.
         + f"""
 
 Whole MPI solves (3 each, alternating): {solves} ("choice": the timed thread choice of
-`lpbounds.dp._ThreadChoice`; "one"/"all": a fixed count).
+`lpbounds.dp.ThreadChoice`; "one"/"all": a fixed count).
 """
     )
     write_section("dp-floor", body)

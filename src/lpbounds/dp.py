@@ -90,6 +90,16 @@ Small models (fewer than :data:`lpbounds._backend.SMALL_READS` values read per s
 on numpy twins of the compiled kernels, with the same arithmetic and the same numbers, so
 a first solve in a fresh environment compiles nothing; larger ones use the compiled
 kernels and say so on the ``lpbounds`` logger when they compile first.
+
+One loop
+--------
+VI, MPI and the game's VI are one loop, :func:`mpi_loop`, and iterative policy
+evaluation is :func:`evaluation_loop`; both run on any
+:class:`~lpbounds.rows.SweepOperator` (the rows, their post-decision form, the
+matrix-free patrol operator of :mod:`lpbounds.patrol.matrix_free`), so every path gives
+the same numbers for the same operator. They keep two value vectors: the starting vector,
+which they overwrite, and one from :meth:`~lpbounds.rows.SweepOperator.new_vector`; the
+result ``u + c`` is formed in place (534 M states at 6 patrol stations: 4.3 GB a vector).
 """
 
 from __future__ import annotations
@@ -106,7 +116,7 @@ import scipy.sparse as sp
 
 from .errors import ConvergenceError, ValidationError
 from .mdp import FiniteMDP
-from .rows import BellmanRows, PostDecisionRows
+from .rows import BellmanRows, PostDecisionRows, SweepOperator
 from .status import Status
 from .stochastic import RowSums, bellman_margin
 from .tolerances import DP_OFFSET_ROWSUM_ATOL, DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
@@ -123,16 +133,26 @@ from .validation import (
 
 __all__ = [
     "DPResult",
+    "EvalPlan",
+    "LoopResult",
     "PolicyEvaluation",
+    "PolicyLoop",
     "PorteusBounds",
+    "PorteusShift",
+    "ThreadChoice",
     "bellman_residual",
+    "check_eval_sweeps",
     "evaluate_policy",
+    "evaluation_loop",
     "exact_rows",
     "greedy_policy",
+    "modulus",
+    "mpi_loop",
     "porteus_bounds",
     "post_decision_rows",
     "solve_exact",
     "solve_game",
+    "threads_for",
 ]
 
 Model = FiniteMDP | BellmanRows
@@ -190,7 +210,8 @@ def _default_tol(rows: BellmanRows | PostDecisionRows, tol: float | None) -> flo
 
 
 def _initial(initial: Any, n: int) -> np.ndarray:
-    """The starting vector: zeros, or ``initial`` checked and copied (once).
+    """The starting vector: zeros, or ``initial`` checked and copied (once): an array of
+    its own, which the loops overwrite.
 
     Its entries must be finite and within ``MAX_VALUE_SCALE`` (the largest accepted
     ``|V*|``): a starting point beyond every possible value only risks overflow.
@@ -205,7 +226,8 @@ def _initial(initial: Any, n: int) -> np.ndarray:
             f"initial[{i}] = {v[i]:.3g} exceeds {MAX_VALUE_SCALE:g} in magnitude "
             "(no value function is that large: lpbounds.validation.MAX_VALUE_SCALE)"
         )
-    return v.copy() if v is initial else v
+    # a fresh array owns its data; ``initial`` itself or a view of the caller's buffer is copied
+    return v if v is not initial and v.flags.owndata else v.copy()
 
 
 def _check_callback(callback: Any) -> None:
@@ -267,7 +289,8 @@ class DPResult:
         of the returned ``values``): actions per state for an MDP, rows per owner for
         a row system.
     policy_rows : ndarray of int
-        The row chosen at each owner.
+        The row chosen at each owner (for the matrix-free patrol operator, which stores no
+        rows, the same int8 array as ``policy``: :func:`lpbounds.patrol.matrix_free.solve_vstar`).
     residual : float
         ``||T values - values||_inf``, measured on the returned vector.
     error_bound : float
@@ -354,6 +377,112 @@ class PorteusBounds:
     alpha_max: float
 
 
+def _absmax(v: np.ndarray) -> float:
+    """``max |v|`` (0 for an empty ``v``) without a temporary of the vector's size: the
+    same number as ``np.abs(v).max(initial=0.0)``, NaN included."""
+    return max(abs(float(v.max(initial=0.0))), abs(float(v.min(initial=0.0))))
+
+
+@dataclass
+class LoopResult:
+    """Where a solver loop (:func:`mpi_loop`, policy iteration, IPI) stopped.
+
+    Attributes
+    ----------
+    values : ndarray
+        The returned vector (the loop's starting vector, overwritten, or its other one).
+    arg : ndarray
+        The choices of the last improvement sweep, greedy w.r.t. ``values`` (rows for
+        :class:`~lpbounds.rows.BellmanRows`, actions for the post-decision form and the
+        matrix-free operator).
+    residual : float
+        ``||T values - values||_inf`` (a bound on it for rows not stochastic to rounding,
+        :class:`PorteusShift`).
+    iterations : int
+        Improvement steps.
+    sweeps : int
+        All sweeps, improvement and evaluation.
+    converged : bool
+        ``residual <= tol``.
+    history : list of float
+        The residual at each improvement step.
+    """
+
+    values: np.ndarray
+    arg: np.ndarray
+    residual: float
+    iterations: int
+    sweeps: int
+    converged: bool
+    history: list[float] = field(default_factory=list)
+
+    def finish(
+        self,
+        method: str,
+        policy: np.ndarray,
+        policy_rows: np.ndarray,
+        tol: float,
+        kappa: float,
+        t0: float,
+        raise_on_failure: bool,
+    ) -> DPResult:
+        """The :class:`DPResult` of the finished loop, or ConvergenceError if it stopped short.
+
+        The returned vector and its residual are checked once here (never per sweep): a
+        non-finite value (float64 overflow, e.g. from a huge but finite ``initial``) can
+        make the sweep's residual extremes meaningless, so it raises instead of being
+        reported with a residual. ``kappa`` is the contraction modulus (:func:`modulus`),
+        ``t0`` the solve's start (``time.perf_counter()``).
+        """
+        res, its = self.residual, self.iterations
+        vmax = _absmax(self.values)  # no temporary: the matrix-free path has two vectors
+        if not (np.isfinite(vmax) and np.isfinite(res)):
+            raise ConvergenceError(
+                f"{method} produced non-finite values (float64 overflow; max|V| = {vmax}, "
+                f"residual {res}): start from a smaller initial vector or rescale the rewards"
+            )
+        if not self.converged and raise_on_failure:
+            raise ConvergenceError(
+                f"{method} stopped after {its} iterations with residual {res:.3e} > tol "
+                f"{tol:.3e}; raise max_iter or tol"
+            )
+        return DPResult(
+            values=self.values,
+            policy=policy,
+            policy_rows=policy_rows,
+            residual=res,
+            error_bound=error_bound(res, vmax, kappa),
+            tol=tol,
+            iterations=its,
+            sweeps=self.sweeps,
+            seconds=time.perf_counter() - t0,
+            method=method,
+            status=Status.OPTIMAL if self.converged else Status.ITERATION_LIMIT,
+            history=self.history,
+        )
+
+
+@dataclass
+class PolicyLoop:
+    """Where :func:`evaluation_loop` stopped.
+
+    Attributes
+    ----------
+    values : ndarray
+        ``V`` (the loop's first vector or its other one; ``u + c`` formed in place).
+    residual : float
+        ``||T_pi V - V||_inf`` measured by one more sweep on ``values`` (with
+        ``measure=False``: the residual of the same iterate from the extremes of the
+        loop's last sweep and the offset, :meth:`PorteusShift.step`).
+    sweeps : int
+        Evaluation sweeps, not counting the measuring one.
+    """
+
+    values: np.ndarray
+    residual: float
+    sweeps: int
+
+
 # ---------------------------------------------------------------------- solvers
 def solve_exact(
     model: Model,
@@ -420,7 +549,7 @@ def solve_exact(
     if method not in ("mpi", "vi", "pi", "ipi"):
         raise ValidationError(f"unknown method {method!r}; use 'mpi', 'vi', 'pi' or 'ipi'")
     max_iter = check_int("max_iter", max_iter, lo=1)
-    eval_sweeps = _check_eval_sweeps(eval_sweeps)
+    eval_sweeps = check_eval_sweeps(eval_sweeps)
     extrapolate = check_bool("extrapolate", extrapolate)
     raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
     check_choice("evaluation", evaluation, ("auto", "direct", "iterative"))
@@ -444,73 +573,26 @@ def solve_exact(
     tol_ = _default_tol(rows, tol)
     v = _initial(initial, rows.n_vars)
     if method == "pi":
-        v, arg, res, its, sweeps, ok, hist = _policy_iteration(
-            model, rows, v, tol_, max_iter, evaluation, callback
-        )
+        run = _policy_iteration(model, rows, v, tol_, max_iter, evaluation, callback)
     elif method == "ipi":
-        v, arg, res, its, sweeps, ok, hist = _inexact_pi(rows, v, tol_, max_iter, callback)
+        run = _inexact_pi(rows, v, tol_, max_iter, callback)
     else:
         m = eval_sweeps if method == "mpi" else 0
-        v, arg, res, its, sweeps, ok, hist = _iterate(
-            rows, v, tol_, max_iter, m, extrapolate, callback
-        )
-    return _result(
-        method, v, _policy_out(model, rows, arg), arg, res, tol_, its, sweeps, ok, hist,
-        modulus(rows), t0, raise_on_failure,
+        run = mpi_loop(rows, v, tol_, max_iter, m, extrapolate, callback)
+    return run.finish(
+        method, _policy_out(model, rows, run.arg), run.arg, tol_, modulus(rows), t0,
+        raise_on_failure,
     )  # fmt: skip
 
 
-def _result(
-    method: str,
-    v: np.ndarray,
-    policy: np.ndarray,
-    policy_rows: np.ndarray,
-    res: float,
-    tol: float,
-    its: int,
-    sweeps: int,
-    ok: bool,
-    hist: list[float],
-    kappa: float,
-    t0: float,
-    raise_on_failure: bool,
-) -> DPResult:
-    """The DPResult of a finished iteration, or ConvergenceError if it stopped short.
+def check_eval_sweeps(eval_sweeps: Any) -> int | Literal["auto"]:
+    """``eval_sweeps`` checked: ``"auto"`` or a non-negative integer.
 
-    The returned vector and its residual are checked once here (never per sweep): a
-    non-finite value (float64 overflow, e.g. from a huge but finite ``initial``) can
-    make the sweep's residual extremes meaningless, so it raises instead of being
-    reported with a residual.
+    Raises
+    ------
+    ValidationError
+        For anything else (a bool, a negative or non-integer number, another string).
     """
-    vmax = float(np.abs(v).max(initial=0.0))
-    if not (np.isfinite(vmax) and np.isfinite(res)):
-        raise ConvergenceError(
-            f"{method} produced non-finite values (float64 overflow; max|V| = {vmax}, "
-            f"residual {res}): start from a smaller initial vector or rescale the rewards"
-        )
-    if not ok and raise_on_failure:
-        raise ConvergenceError(
-            f"{method} stopped after {its} iterations with residual {res:.3e} > tol {tol:.3e}; "
-            "raise max_iter or tol"
-        )
-    return DPResult(
-        values=v,
-        policy=policy,
-        policy_rows=policy_rows,
-        residual=res,
-        error_bound=error_bound(res, vmax, kappa),
-        tol=tol,
-        iterations=its,
-        sweeps=sweeps,
-        seconds=time.perf_counter() - t0,
-        method=method,
-        status=Status.OPTIMAL if ok else Status.ITERATION_LIMIT,
-        history=hist,
-    )
-
-
-def _check_eval_sweeps(eval_sweeps: Any) -> int | Literal["auto"]:
-    """``eval_sweeps``: ``"auto"`` or a non-negative integer."""
     if isinstance(eval_sweeps, str) and eval_sweeps == "auto":
         return "auto"
     if not is_int(eval_sweeps):
@@ -520,9 +602,15 @@ def _check_eval_sweeps(eval_sweeps: Any) -> int | Literal["auto"]:
     return check_int("eval_sweeps", eval_sweeps, lo=0)
 
 
-class _EvalPlan:
+class EvalPlan:
     """MPI's evaluation sweeps after each improvement: a fixed number, or the ``"auto"``
-    rule of the module docstring ("Evaluation sweeps of MPI")."""
+    rule of the module docstring ("Evaluation sweeps of MPI").
+
+    Parameters
+    ----------
+    eval_sweeps : int or "auto"
+        As checked by :func:`check_eval_sweeps`.
+    """
 
     def __init__(self, eval_sweeps: int | str) -> None:
         self.fixed = None if eval_sweeps == "auto" else int(eval_sweeps)
@@ -549,6 +637,10 @@ class _EvalPlan:
         return AUTO_EVAL_SWEEPS if changed <= AUTO_SETTLED * arg.size else 0
 
 
+#: The pre-protocol private name (tests/test_dp.py imports it): remove once it uses EvalPlan.
+_EvalPlan = EvalPlan
+
+
 def _solve_post_decision(
     model: Model,
     ps: PostDecisionRows,
@@ -567,15 +659,13 @@ def _solve_post_decision(
     v = _initial(initial, ps.n_vars)
     m = eval_sweeps if method == "mpi" else 0
     if method == "ipi":
-        v, act, res, its, sweeps, ok, hist = _inexact_pi(ps, v, tol_, max_iter, callback)
+        run = _inexact_pi(ps, v, tol_, max_iter, callback)
     else:
-        v, act, res, its, sweeps, ok, hist = _iterate(
-            ps, v, tol_, max_iter, m, extrapolate, callback
-        )
-    return _result(
-        method, v, act.astype(np.int64), ps.rows_of(act), res, tol_, its, sweeps, ok, hist,
-        modulus(ps), t0, raise_on_failure,
-    )  # fmt: skip
+        run = mpi_loop(ps, v, tol_, max_iter, m, extrapolate, callback)
+    act = run.arg
+    return run.finish(
+        method, act.astype(np.int64), ps.rows_of(act), tol_, modulus(ps), t0, raise_on_failure
+    )
 
 
 #: Below this many value reads per sweep the sweeps run on one thread: a parallel region
@@ -585,17 +675,13 @@ def _solve_post_decision(
 SERIAL_SWEEP_READS: int = 1_000_000
 
 
-def _sweep_reads(ops: BellmanRows | PostDecisionRows) -> int:
-    if isinstance(ops, PostDecisionRows):
-        return ops.n_post * ops.outcomes.shape[1] + ops.first.size
-    return ops.n_rows * ops.n_outcomes
-
-
 @contextmanager
-def _threads_for(ops: BellmanRows | PostDecisionRows) -> Iterator[None]:
-    """Run the enclosed sweeps on one thread when they are small (see SERIAL_SWEEP_READS).
+def threads_for(ops: SweepOperator) -> Iterator[None]:
+    """Run the enclosed sweeps of ``ops`` on one thread when they are small.
 
-    Only compiled sweeps have threads; numba is not imported for the numpy ones.
+    Below :data:`SERIAL_SWEEP_READS` values read per sweep (``ops.sweep_reads``) numba's
+    thread count is set to 1 for the block and restored after. Only compiled sweeps have
+    threads; numba is not imported for the numpy ones.
     """
     if not ops.compiled:
         yield
@@ -603,7 +689,7 @@ def _threads_for(ops: BellmanRows | PostDecisionRows) -> Iterator[None]:
     import numba
 
     before = numba.get_num_threads()
-    serial = before > 1 and _sweep_reads(ops) < SERIAL_SWEEP_READS
+    serial = before > 1 and ops.sweep_reads < SERIAL_SWEEP_READS
     if serial:
         numba.set_num_threads(1)
     try:
@@ -613,18 +699,23 @@ def _threads_for(ops: BellmanRows | PostDecisionRows) -> Iterator[None]:
             numba.set_num_threads(before)
 
 
+#: The pre-protocol private name (lpbounds.formulations.nlp imports it): remove once it
+#: uses threads_for.
+_threads_for = threads_for
+
+
 def _serial_if_small(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Run ``func(rows, ...)`` with the thread count :func:`_threads_for` picks for ``rows``."""
+    """Run ``func(ops, ...)`` with the thread count :func:`threads_for` picks for ``ops``."""
 
     @functools.wraps(func)
-    def wrapper(rows: Any, *args: Any, **kwargs: Any) -> Any:
-        with _threads_for(rows):
-            return func(rows, *args, **kwargs)
+    def wrapper(ops: Any, *args: Any, **kwargs: Any) -> Any:
+        with threads_for(ops):
+            return func(ops, *args, **kwargs)
 
     return wrapper
 
 
-class _ThreadChoice:
+class ThreadChoice:
     """One thread or all of numba's for the sweeps of one large solve, chosen by timing.
 
     Two threads halve a sweep on an idle 2-core machine, but when other jobs hold the
@@ -639,7 +730,7 @@ class _ThreadChoice:
     evaluation sweep 30). Every :attr:`RECHECK` sweeps of a kind, the other count is timed
     again and taken for that kind if faster by :attr:`MARGIN` than the median of the
     chosen count's last three (the load changes). Sweeps below :data:`SERIAL_SWEEP_READS`
-    always run on one thread (:func:`_threads_for`). The thread count changes no number:
+    always run on one thread (:func:`threads_for`). The thread count changes no number:
     every state's value is computed by the same arithmetic on whichever thread, and the
     residual extremes are exact minima and maxima.
     """
@@ -653,9 +744,9 @@ class _ThreadChoice:
     #: 7: one thread 3.8-4.9 s, all 6.7-9.4 s, a plain lower-mean choice 5.4-5.6 s).
     PREFER: float = 0.85
 
-    def __init__(self, ops: BellmanRows | PostDecisionRows) -> None:
+    def __init__(self, ops: SweepOperator) -> None:
         self.many = 1
-        if ops.compiled and _sweep_reads(ops) >= SERIAL_SWEEP_READS:
+        if ops.compiled and ops.sweep_reads >= SERIAL_SWEEP_READS:
             import numba
 
             self.many = numba.get_num_threads()
@@ -710,6 +801,15 @@ class _ThreadChoice:
             if seconds < self.MARGIN * recent:
                 self.chosen[kind] = threads
 
+    def timed(self, kind: str, sweep: Callable[..., tuple[float, float]], *args: Any) -> Any:
+        """``sweep(*args)`` on the thread count :meth:`start` sets for ``kind``, timed into
+        :meth:`stop`; returns what the sweep returns."""
+        k = self.start(kind)
+        t = time.perf_counter()
+        out = sweep(*args)
+        self.stop(kind, k, time.perf_counter() - t)
+        return out
+
     def _mean(self, kind: str, threads: int) -> float:
         return float(np.mean(self.times.get((kind, threads)) or [np.inf]))
 
@@ -723,6 +823,11 @@ class _ThreadChoice:
     def restore(self) -> None:
         """Back to numba's thread count at the start."""
         self._set(self.many)
+
+
+#: The pre-protocol private name (tests/test_fast_paths.py and benchmarks/bench_dp.py use
+#: it): remove once they use ThreadChoice.
+_ThreadChoice = ThreadChoice
 
 
 class PorteusShift:
@@ -778,68 +883,88 @@ class PorteusShift:
         return c
 
 
-def modulus(ops: BellmanRows | PostDecisionRows) -> float:
+def modulus(ops: SweepOperator) -> float:
     """``lambda max_r sum_l p_{r,l}`` rounded up: the contraction modulus the error bounds use."""
     return ops.row_sums().modulus(ops.discount)
 
 
+def _improvement(
+    ops: SweepOperator, game: bool, work: np.ndarray | None
+) -> Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[float, float]]:
+    """The improvement sweep ``(u, out, arg) -> (lo, hi)``: ``T``, or the game's ``G``."""
+    if game:  # the game operator exists on row systems only
+        if not isinstance(ops, BellmanRows):
+            raise ValidationError(f"the game operator needs BellmanRows; got {type(ops).__name__}")
+        return ops.sweep_maxmin
+    return functools.partial(ops.sweep_max, work=work)
+
+
 @_serial_if_small
-def _iterate(
-    rows: BellmanRows | PostDecisionRows,
+def mpi_loop(
+    ops: SweepOperator,
     v: np.ndarray,
     tol: float,
     max_iter: int,
-    eval_sweeps: int | Literal["auto"],
-    extrapolate: bool,
-    callback: Callback | None,
+    eval_sweeps: int | Literal["auto"] = "auto",
+    extrapolate: bool = True,
+    callback: Callback | None = None,
+    *,
     game: bool = False,
-) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
-    """VI / MPI (and game VI) with the Porteus shift carried as a scalar offset.
+) -> LoopResult:
+    """VI / MPI (and the game's VI) with the Porteus shift carried as a scalar offset.
 
     The iterate is ``v = u + c`` with ``u`` an array and ``c`` a scalar: since
     ``T(u + c) = T u + lambda c`` (and likewise for a fixed policy and for the game
     operator), a sweep computes ``T u`` and the extremes of ``T u - u`` in one pass, the
     residual extremes of ``v`` are those less ``(1 - lambda) c``, and the shift only
-    updates ``c``. ``u + c`` is formed once, at the end (:class:`PorteusShift`: rows
-    that are not stochastic to rounding fold the offset into ``u`` after every sweep).
+    updates ``c``. ``u + c`` is formed once, at the end, in place (:class:`PorteusShift`:
+    rows that are not stochastic to rounding fold the offset into ``u`` after every sweep).
+    The sweeps run on the thread count :class:`ThreadChoice` picks (no number changes).
+
+    Parameters
+    ----------
+    ops : SweepOperator
+    v : ndarray
+        The starting vector, **overwritten** (the loop's first value vector; its second
+        comes from ``ops.new_vector()``): pass a copy to keep it.
+    tol : float
+        Stop at the first improvement sweep whose residual is ``<= tol``.
+    max_iter : int
+        Limit on improvement steps (``max_iter + 1`` improvement sweeps at most).
+    eval_sweeps : int or "auto"
+        Evaluation sweeps after each improvement (:class:`EvalPlan`); 0 is value iteration.
+    extrapolate : bool
+        The Porteus/MacQueen shift.
+    callback : callable(iteration, residual), optional
+        Called after each improvement sweep.
+    game : bool
+        Improve with the game operator ``G`` (``ops`` must be :class:`BellmanRows`).
+
+    Returns
+    -------
+    LoopResult
+        ``values`` is ``v`` or the other vector, ``arg`` from ``ops.new_arg()``.
     """
-    shift = PorteusShift(rows.discount, rows.row_sums())
-    nchunks = rows._chunks()
-    sweeps = 0
-    hist: list[float] = []
-    res = np.inf
-    u = v.copy()
-    buf = np.empty_like(u)
-    kw: dict[str, Any] = {}
-    if isinstance(rows, PostDecisionRows):
-        arg = rows.new_arg()  # actions, not rows
-        kw["w"] = rows.new_work()  # reused by every sweep of this solve
-    else:
-        arg = np.zeros(rows.n_vars, dtype=np.int64)
-    maxmin = None
-    if game:  # the game operator exists on row systems only (solve_game checks the type)
-        assert isinstance(rows, BellmanRows)
-        maxmin = rows._sweep_maxmin
+    shift = PorteusShift(ops.discount, ops.row_sums())
+    plan = EvalPlan(check_eval_sweeps(eval_sweeps))
+    work = ops.new_work()  # reused by every sweep of this solve
+    improve = _improvement(ops, game, work)
+    evaluator = ops.evaluator(work) if plan.ever else None
+    u, buf, arg = v, ops.new_vector(), ops.new_arg()
+    run = LoopResult(u, arg, np.inf, max_iter, 0, False)
     c = 0.0
-    plan = _EvalPlan(eval_sweeps)
-    evaluator = rows._evaluator(nchunks, **kw) if plan.ever else None
-    threads = _ThreadChoice(rows)
+    threads = ThreadChoice(ops)
     try:
         for it in range(max_iter + 1):
-            k = threads.start("max")
-            t = time.perf_counter()
-            if maxmin is not None:
-                lo, hi = maxmin(u, buf, arg)
-            else:
-                lo, hi = rows._sweep_max(u, buf, arg, nchunks, **kw)
-            threads.stop("max", k, time.perf_counter() - t)
-            sweeps += 1
-            res, c_next = shift.step(c, lo, hi, extrapolate)
-            hist.append(res)
+            lo, hi = threads.timed("max", improve, u, buf, arg)
+            run.sweeps += 1
+            run.residual, c_next = shift.step(c, lo, hi, extrapolate)
+            run.history.append(run.residual)
             if callback is not None:
-                callback(it, res)
-            if res <= tol:
-                return u + c, arg, res, it, sweeps, True, hist
+                callback(it, run.residual)
+            if run.residual <= tol:
+                run.iterations, run.converged = it, True
+                break
             if it == max_iter:
                 break
             u, buf = buf, u
@@ -850,17 +975,17 @@ def _iterate(
             assert evaluator is not None  # plan.ever
             evaluator.set_policy(arg)
             for _ in range(m):
-                k = threads.start("policy")
-                t = time.perf_counter()
-                lo, hi = evaluator.sweep(u, buf)
-                threads.stop("policy", k, time.perf_counter() - t)
-                sweeps += 1
+                lo, hi = threads.timed("policy", evaluator.sweep, u, buf)
+                run.sweeps += 1
                 _, c_next = shift.step(c, lo, hi, extrapolate)
                 u, buf = buf, u
                 c = shift.settle(u, c_next)
     finally:
         threads.restore()
-    return u + c, arg, res, max_iter, sweeps, False, hist
+    del buf, evaluator
+    u += c  # u + c, in place: the same numbers as a new vector, one vector less
+    run.values = u
+    return run
 
 
 #: Inexact policy iteration: each evaluation stops when the max norm of its residual is at
@@ -880,7 +1005,7 @@ def _inexact_pi(
     tol: float,
     max_iter: int,
     callback: Callback | None,
-) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
+) -> LoopResult:
     """Inexact policy iteration: improvement sweeps, GMRES evaluations of the greedy policy.
 
     At ``u`` the improvement sweep gives ``T u``, the greedy policy ``pi`` and the
@@ -889,48 +1014,43 @@ def _inexact_pi(
     GMRES until ``||T_pi(u + d) - (u + d)||_inf <= max(IPI_FORCING * res, tol / 2)``,
     right-preconditioned by ``1 / (1 - lambda P_pi(x, x))`` (self-loops). The product
     ``lambda P_pi z`` is the policy sweep with zero rewards. The returned residual is
-    measured by a full improvement sweep on the returned vector, as for MPI.
+    measured by a full improvement sweep on the returned vector, as for MPI. ``v`` is
+    overwritten (the iterate).
     """
     from ._krylov import gmres
 
     lam = ops.discount
-    nchunks = ops._chunks()
-    hist: list[float] = []
-    kw: dict[str, Any] = {}
-    if isinstance(ops, PostDecisionRows):
-        arg = ops.new_arg()
-        kw["w"] = ops.new_work()
-    else:
-        arg = np.zeros(ops.n_vars, dtype=np.int64)
+    arg = ops.new_arg()
+    work = ops.new_work()
     zero = ops.zero_rewards()
-    u = v.copy()
-    tu = np.empty_like(u)
-    prod = np.empty_like(u)
+    u = v
+    tu = ops.new_vector()
+    prod = ops.new_vector()
 
     def apply(z: np.ndarray) -> np.ndarray:  # (I - lambda P_pi) z
-        ops._sweep_policy(arg, z, prod, nchunks, reward=zero, **kw)
+        ops.sweep_policy(arg, z, prod, work=work, reward=zero)
         np.subtract(z, prod, out=prod)
         return prod
 
-    sweeps = 0
-    res = np.inf
+    run = LoopResult(u, arg, np.inf, max_iter, 0, False)
     for it in range(max_iter + 1):
-        lo, hi = ops._sweep_max(u, tu, arg, nchunks, **kw)
-        sweeps += 1
-        res = max(-lo, hi)
-        hist.append(res)
+        lo, hi = ops.sweep_max(u, tu, arg, work=work)
+        run.sweeps += 1
+        run.residual = res = max(-lo, hi)
+        run.history.append(res)
         if callback is not None:
             callback(it, res)
         if res <= tol:
-            return u, arg, res, it, sweeps, True, hist
+            run.iterations, run.converged = it, True
+            break
         if it == max_iter:
             break
         dinv = 1.0 / (1.0 - lam * ops.self_loops(arg))
         target = max(IPI_FORCING * res, 0.5 * tol)
         d, k = gmres(apply, tu - u, target, IPI_RESTART, IPI_MAX_PRODUCTS, dinv)
-        sweeps += k
+        run.sweeps += k
         u += d
-    return u, arg, res, max_iter, sweeps, False, hist
+    return run
 
 
 def _greedy_rows(
@@ -958,7 +1078,9 @@ def _policy_iteration(
     max_iter: int,
     evaluation: str,
     callback: Callback | None,
-) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
+) -> LoopResult:
+    """Policy iteration: exact evaluations (:func:`_evaluate_rows`), greedy improvements
+    that keep a tied policy; the residual is measured by a max sweep at the end."""
     pol, _ = _greedy_rows(rows, v, GREEDY_TIE_RTOL)
     sweeps = 0
     hist: list[float] = []
@@ -975,10 +1097,10 @@ def _policy_iteration(
         if np.array_equal(new, pol):
             tv, arg = rows.apply_max(v)
             res = float(np.abs(tv - v).max())
-            return v, arg, res, it, sweeps, res <= tol, hist
+            return LoopResult(v, arg, res, it, sweeps, res <= tol, hist)
         pol = new
     tv, arg = rows.apply_max(v)
-    return v, arg, float(np.abs(tv - v).max()), max_iter, sweeps, False, hist
+    return LoopResult(v, arg, float(np.abs(tv - v).max()), max_iter, sweeps, False, hist)
 
 
 def solve_game(
@@ -1011,13 +1133,8 @@ def solve_game(
     raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
     _check_callback(callback)
     v = _initial(initial, rows.n_vars)
-    v, arg, res, its, sweeps, ok, hist = _iterate(
-        rows, v, tol_, max_iter, 0, True, callback, game=True
-    )
-    return _result(
-        "game-vi", v, arg, arg, res, tol_, its, sweeps, ok, hist, modulus(rows), t0,
-        raise_on_failure,
-    )  # fmt: skip
+    run = mpi_loop(rows, v, tol_, max_iter, 0, True, callback, game=True)
+    return run.finish("game-vi", run.arg, run.arg, tol_, modulus(rows), t0, raise_on_failure)
 
 
 # ---------------------------------------------------------------------- evaluation
@@ -1037,7 +1154,8 @@ def _evaluate_rows(
         v = np.asarray(spla.spsolve(a, r_pi), dtype=np.float64)
         sweeps = 0
     elif method == "iterative":
-        v, sweeps = _evaluate_iterative(rows, sel, tol, max_sweeps)
+        run = evaluation_loop(rows, sel, tol, max_sweeps, measure=False)
+        v, sweeps = run.values, run.sweeps
     else:
         raise ValidationError(f"unknown evaluation {method!r}; use 'direct' or 'iterative'")
     res = float(np.abs(rows.evaluate_rows(sel, v) - v).max())
@@ -1054,31 +1172,65 @@ def _evaluate_rows(
 
 
 @_serial_if_small
-def _evaluate_iterative(
-    ops: BellmanRows | PostDecisionRows, sel: np.ndarray, tol: float, max_sweeps: int
-) -> tuple[np.ndarray, int]:
-    """Extrapolated evaluation sweeps of a fixed policy until the residual is <= ``tol``.
+def evaluation_loop(
+    ops: SweepOperator,
+    sel: np.ndarray,
+    tol: float,
+    max_sweeps: int,
+    callback: Callback | None = None,
+    *,
+    measure: bool = True,
+) -> PolicyLoop:
+    """Extrapolated evaluation sweeps of a fixed policy from 0 until the residual is <= ``tol``.
 
-    The Porteus shift is carried as a scalar offset as in :func:`_iterate`: the iterate
-    is ``u + c``; ``T_pi(u + c) - (u + c) = (T_pi u - u) - (1 - lambda) c``. ``sel`` is
-    rows (BellmanRows) or actions (PostDecisionRows); :class:`PorteusShift` for rows that
-    are not stochastic.
+    The Porteus shift is carried as a scalar offset as in :func:`mpi_loop`: the iterate
+    is ``u + c``; ``T_pi(u + c) - (u + c) = (T_pi u - u) - (1 - lambda) c``
+    (:class:`PorteusShift` for rows that are not stochastic). Two value vectors (zeros and
+    ``ops.new_vector()``); ``u + c`` is formed in place and, with ``measure``, its residual
+    measured by one more sweep into the other vector.
+
+    Parameters
+    ----------
+    ops : SweepOperator
+    sel : ndarray
+        The policy in the operator's choices (rows of a row system, int8 actions of the
+        post-decision form and the matrix-free operator).
+    tol : float
+    max_sweeps : int
+        Stop after this many sweeps whatever the residual (the caller checks it).
+    callback : callable(sweep, residual), optional
+        Called after every sweep (1, 2, ...).
+    measure : bool
+        Measure the residual of the returned vector (one more sweep).
+
+    Returns
+    -------
+    PolicyLoop
     """
     shift = PorteusShift(ops.discount, ops.row_sums())
-    nchunks = ops._chunks()
+    sweep = functools.partial(ops.sweep_policy, sel, work=ops.new_work())
     u = np.zeros(ops.n_vars)
-    buf = np.empty_like(u)
-    kw: dict[str, Any] = {"w": ops.new_work()} if isinstance(ops, PostDecisionRows) else {}
-    c = 0.0
-    sweeps = 0
-    while True:
-        lo, hi = ops._sweep_policy(sel, u, buf, nchunks, **kw)
-        sweeps += 1
-        res, c_next = shift.step(c, lo, hi, True)
-        if res <= tol or sweeps >= max_sweeps:
-            return u + c, sweeps
-        u, buf = buf, u
-        c = shift.settle(u, c_next)
+    buf = ops.new_vector()
+    c, sweeps = 0.0, 0
+    threads = ThreadChoice(ops)
+    try:
+        while True:
+            lo, hi = threads.timed("policy", sweep, u, buf)
+            sweeps += 1
+            res, c_next = shift.step(c, lo, hi, True)
+            if callback is not None:
+                callback(sweeps, res)
+            if res <= tol or sweeps >= max_sweeps:
+                break
+            u, buf = buf, u
+            c = shift.settle(u, c_next)
+        u += c  # u + c, in place
+        if measure:  # on the returned vector
+            lo, hi = threads.timed("policy", sweep, u, buf)
+            res = max(-lo, hi)
+    finally:
+        threads.restore()
+    return PolicyLoop(u, res, sweeps)
 
 
 def _evaluate_post_decision(
@@ -1087,19 +1239,16 @@ def _evaluate_post_decision(
     """Iterative policy evaluation on the post-decision form (actions, not rows)."""
     t0 = time.perf_counter()
     pol = _check_policy(policy, ps.n_vars, mdp)
-    act = pol.astype(np.int8)
-    v, sweeps = _evaluate_iterative(ps, act, tol, 1_000_000)
-    out = np.empty_like(v)
-    lo, hi = ps._sweep_policy(act, v, out, ps._chunks())  # measured on the returned vector
-    res = max(-lo, hi)
+    run = evaluation_loop(ps, pol.astype(np.int8), tol, 1_000_000)
+    res = run.residual
     if res > tol:
         raise ConvergenceError(f"policy evaluation stopped with residual {res:.3e} > {tol:.3e}")
     return PolicyEvaluation(
-        values=v,
+        values=run.values,
         residual=res,
-        error_bound=error_bound(res, float(np.abs(v).max(initial=0.0)), modulus(ps)),
+        error_bound=error_bound(res, _absmax(run.values), modulus(ps)),
         method="iterative",
-        sweeps=sweeps,
+        sweeps=run.sweeps,
         seconds=time.perf_counter() - t0,
     )
 
@@ -1166,8 +1315,7 @@ def bellman_residual(model: Model, values: Any) -> float:
     ps = post_decision_rows(model)
     if ps is not None:
         v = check_vector("values", values, ps.n_vars)
-        out = np.empty_like(v)
-        lo, hi = ps._sweep_max(v, out, ps.new_arg(), ps._chunks())
+        lo, hi = ps.sweep_max(v, ps.new_vector(), ps.new_arg())
         return max(-lo, hi)
     rows = exact_rows(model)
     v = check_vector("values", values, rows.n_vars)

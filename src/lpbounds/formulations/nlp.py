@@ -88,7 +88,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..certificate import Certificate, certify
-from ..dp import _threads_for, solve_exact, solve_game
+from ..dp import solve_exact, solve_game, threads_for
 from ..errors import ConvergenceError, SolverError, ValidationError
 from ..mdp import FiniteMDP
 from ..partition import Partition
@@ -591,7 +591,7 @@ class NLP:
             raise ValidationError(f"gap_rtol must be a finite number >= 0; got {gap_rtol!r}")
         opts = _method_options(method, options)
         t0 = time.perf_counter()
-        with _progress_bar(progress, method, opts.get("max_iter")) as tick, _threads_for(self.rows):
+        with _progress_bar(progress, method, opts.get("max_iter")) as tick, threads_for(self.rows):
             if method == "cutting-planes":
                 out = self._cutting_planes(opts, gap_rtol, tick)
             elif method == "strategy-iteration":

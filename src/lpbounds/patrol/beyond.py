@@ -40,8 +40,7 @@ import numpy as np
 from ..checks import compare_at_least
 from ..status import Status, Verdict
 from ..tolerances import GREEDY_TIE_RTOL, error_bound
-from . import matrix_free as mfm
-from .matrix_free import MatrixFreePatrol, evaluate_policy, solve_vstar
+from .matrix_free import MatrixFreePatrol, check_finite, evaluate_policy, solve_vstar
 from .params import PatrolParams
 
 __all__ = [
@@ -183,33 +182,6 @@ def _peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _reduce_greedy(f: np.ndarray, st: np.ndarray, n: int) -> dict[str, Any]:
-    """Merge the greedy pass's per-chunk statistics."""
-    up_c = int(np.argmin(f[:, mfm._F_UP_MIN]))
-    low_c = int(np.argmin(f[:, mfm._F_LOW_MIN]))
-    up_mean = float(f[:, mfm._F_UP_SUM].sum() / n)
-    low_mean = float(f[:, mfm._F_LOW_SUM].sum() / n)
-    gap_mean = float(f[:, mfm._F_GAP_SUM].sum() / n)
-    return {
-        "upper_max": float(f[:, mfm._F_UP_MAX].max()),
-        "upper_mean": up_mean,
-        "upper_min": float(f[up_c, mfm._F_UP_MIN]),
-        "upper_argmin": int(st[up_c, mfm._I_UP_ARGMIN]),
-        "lower_max": float(f[:, mfm._F_LOW_MAX].max()),
-        "lower_mean": low_mean,
-        "lower_min": float(f[low_c, mfm._F_LOW_MIN]),
-        "lower_argmin": int(st[low_c, mfm._I_LOW_ARGMIN]),
-        "gap_max": float(f[:, mfm._F_GAP_MAX].max()),
-        "gap_mean": gap_mean,
-        "upper_share": up_mean / gap_mean if gap_mean > 0 else float("nan"),
-        "lower_share": low_mean / gap_mean if gap_mean > 0 else float("nan"),
-        "optimal": int(st[:, mfm._I_OPTIMAL].sum()),
-        "differs": int(st[:, mfm._I_DIFFERS].sum()),
-        "suboptimal": int(st[:, mfm._I_SUBOPT].sum()),
-        "max_one_step_loss": float(f[:, mfm._F_LOSS_MAX].max()),
-    }
-
-
 def greedy_pass(
     mf: MatrixFreePatrol,
     vstar: np.ndarray,
@@ -218,67 +190,21 @@ def greedy_pass(
     v_up: np.ndarray,
     loss_tol: float,
 ) -> tuple[np.ndarray, dict[str, Any]]:
-    """``pi_s`` (int8) greedy w.r.t. the lifted ``w_low`` and the gap and policy statistics.
+    """``pi_s`` (int8) greedy w.r.t. the lifted ``w_low`` and the gap and policy statistics
+    (:meth:`MatrixFreePatrol.greedy_gap`, ties within :data:`GREEDY_TIE_RTOL`).
 
     ``loss_tol``: a one-step loss ``max_u Q*(x, u) - Q*(x, pi_s(x))`` above it counts as
     certainly suboptimal (``2 error_bound(V*)``, as the 4-station report counts).
     """
-    labels = mf.labels()
-    n = mf.n_vars
-    nch = mf.nchunks()
-    f = np.empty((nch, 9))
-    st = np.empty((nch, 5), dtype=np.int64)
-    pi_s = np.empty(n, dtype=np.int8)
-    mfm._greedy_gap_kernel(
-        *mf._common(),
-        vstar,
-        labels,
-        np.ascontiguousarray(w_low, dtype=np.float64),
-        np.ascontiguousarray(v_up, dtype=np.float64),
-        np.ascontiguousarray(pistar, np.int8),
-        GREEDY_TIE_RTOL,
-        float(loss_tol),
-        pi_s,
-        f,
-        st,
-        nch,
-        mf._block,
-    )
-    del labels
-    return pi_s, _reduce_greedy(f, st, n)
+    return mf.greedy_gap(vstar, pistar, w_low, v_up, loss_tol, GREEDY_TIE_RTOL)
 
 
 def vsub_pass(
     mf: MatrixFreePatrol, vstar: np.ndarray, vsub: np.ndarray, w_low: np.ndarray
 ) -> dict[str, Any]:
-    """Max, mean and min of ``V* - V_sub`` and the smallest ``V_sub - w*`` (with states)."""
-    nch = mf.nchunks()
-    f = np.empty((nch, 4))
-    st = np.empty((nch, 3), dtype=np.int64)
-    mfm._vsub_kernel(
-        mf._geo,
-        mf._stations,
-        mf._sp,
-        vstar,
-        vsub,
-        np.ascontiguousarray(w_low, dtype=np.float64),
-        f,
-        st,
-        nch,
-        mf._block,
-    )
-    c_max = int(np.argmax(f[:, mfm._S_MAX]))
-    c_min = int(np.argmin(f[:, mfm._S_MIN]))
-    c_low = int(np.argmin(f[:, mfm._S_LOW_MIN]))
-    return {
-        "max": float(f[c_max, mfm._S_MAX]),
-        "argmax": int(st[c_max, mfm._J_ARGMAX]),
-        "mean": float(f[:, mfm._S_SUM].sum() / mf.n_vars),
-        "min": float(f[c_min, mfm._S_MIN]),
-        "argmin": int(st[c_min, mfm._J_ARGMIN]),
-        "low_min": float(f[c_low, mfm._S_LOW_MIN]),
-        "low_argmin": int(st[c_low, mfm._J_LOW_ARGMIN]),
-    }
+    """Max, mean and min of ``V* - V_sub`` and the smallest ``V_sub - w*`` (with states):
+    :meth:`MatrixFreePatrol.vsub_stats`."""
+    return mf.vsub_stats(vstar, vsub, w_low)
 
 
 @contextmanager
@@ -516,7 +442,7 @@ def _recertify(mf: MatrixFreePatrol, vstar: np.ndarray, vs: dict[str, Any]) -> d
     lo, hi = mf.sweep_max(vstar, out, arg)
     del out, arg
     res = max(-lo, hi)
-    vmax = mfm._check_finite("the saved V*", vstar, res)
+    vmax = check_finite("the saved V*", vstar, res)
     ok = res <= float(vs["tol"])
     return {
         **vs,

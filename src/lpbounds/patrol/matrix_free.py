@@ -20,15 +20,16 @@ Every Q-value is computed with the array path's arithmetic, in its order:
 ``W = sum_l p_l v(g_l)`` accumulated from ``0.0`` over ``l = 0..m``, then
 ``q = R_u(x) + lambda W`` with ``R_u(x)`` the float :meth:`PatrolModel.rewards` stores;
 the maximum keeps the first maximising action; a sweep returns the extremes of
-``T v - v``. :func:`solve_vstar` runs the iteration of :func:`lpbounds.solve_exact`
-(MPI with the same ``eval_sweeps`` rule, the Porteus shift carried as a scalar offset through
-:class:`lpbounds.dp.PorteusShift`, the default tolerance ``DP_RTOL max|R| / (1 -
-lambda)``), and :func:`evaluate_policy` that of :func:`lpbounds.evaluate_policy`'s
-iterative method, so both return the array path's vectors bit for bit
+``T v - v``. :class:`MatrixFreePatrol` implements the sweep protocol
+(:class:`lpbounds.rows.SweepOperator`), so :func:`solve_vstar` and
+:func:`evaluate_policy` run the very loops of :func:`lpbounds.solve_exact` and
+:func:`lpbounds.evaluate_policy`'s iterative method (:func:`lpbounds.dp.mpi_loop`,
+:func:`lpbounds.dp.evaluation_loop`: the same ``eval_sweeps`` rule, the Porteus shift
+carried as a scalar offset, the thread choice), with the default tolerance
+``DP_RTOL max|R| / (1 - lambda)``, and both return the array path's vectors bit for bit
 (``tests/patrol/test_matrix_free.py`` checks it; ``benchmarks/bench_beyond.py`` on the
-paper's instance). Only the memory differs: the loops here keep two value vectors (the
-array path's loop also keeps the initial vector and forms ``u + c`` in a new one: four
-4.3 GB vectors at 6 stations), and the policy as int8.
+paper's instance). Only the memory differs: the loops keep two value vectors (4.3 GB each
+at 6 stations) and form ``u + c`` in place, and the policy is int8.
 
 Certificate
 -----------
@@ -41,26 +42,17 @@ the status is :attr:`Status.OPTIMAL` when the residual reached the tolerance.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass, field
-from typing import Any, Literal, cast
+from collections.abc import Callable
+from typing import Any, Literal
 
 import numpy as np
 from numba import njit, prange
 
-from ..dp import (
-    PolicyEvaluation,
-    PorteusShift,
-    _check_eval_sweeps,
-    _EvalPlan,
-    _ThreadChoice,
-    _threads_for,
-)
+from ..dp import DPResult, PolicyEvaluation, check_eval_sweeps, evaluation_loop, mpi_loop
 from ..errors import ConvergenceError, ValidationError
-from ..status import Status
+from ..rows import PolicySweeps
 from ..stochastic import RowSums, row_sums
-from ..tolerances import DP_RTOL, dp_scale, error_bound
+from ..tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
 from ..validation import check_int
 from .model import PatrolModel, _decode_kernel, _successor_kernel
 from .params import PatrolParams
@@ -69,7 +61,7 @@ from .partitions import block_sizes, state_partition_kernel
 __all__ = [
     "BLOCK",
     "MatrixFreePatrol",
-    "MatrixFreeSolution",
+    "check_finite",
     "evaluate_policy",
     "solve_vstar",
 ]
@@ -657,14 +649,13 @@ class MatrixFreePatrol:
         self._inc = np.append(p.information_increments(), 0.0)
         self._rho = float(p.rho)
         self._reward_absmax: float | None = None
-        self._choice: Any = None  # a dp._ThreadChoice while a solve runs (_adaptive_threads)
         row = int(self._geo[_ROW])
         self._block = max(1, BLOCK // row) * row  # whole rows
 
     def __repr__(self) -> str:
         return f"MatrixFreePatrol(n_states={self.n_vars:,}, m={self.params.m})"
 
-    #: The sweeps are compiled (for :func:`lpbounds.dp._threads_for`, which runs sweeps of
+    #: The sweeps are compiled (for :func:`lpbounds.dp.threads_for`, which runs sweeps of
     #: fewer than ``SERIAL_SWEEP_READS`` reads on one thread, as the array path does).
     compiled: bool = True
 
@@ -677,6 +668,12 @@ class MatrixFreePatrol:
     def n_outcomes(self) -> int:
         """Outcomes per pair, ``m + 1``."""
         return self.params.m + 1
+
+    @property
+    def sweep_reads(self) -> int:
+        """Values a sweep reads at most, ``n_rows * n_outcomes`` (the thread rule of
+        :func:`lpbounds.dp.threads_for`, as for the array path's rows)."""
+        return self.n_rows * self.n_outcomes
 
     @staticmethod
     def nchunks() -> int:
@@ -728,33 +725,53 @@ class MatrixFreePatrol:
         """:func:`lpbounds.solve_exact`'s default: ``DP_RTOL max|R| / (1 - lambda)``."""
         return DP_RTOL * dp_scale(self.reward_absmax, self.discount)
 
+    # ------------------------------------------------------------------ sweep protocol
     def new_vector(self) -> np.ndarray:
         """An uninitialised float64 vector over the states."""
         return np.empty(self.n_vars)
 
-    def sweep_max(self, v: np.ndarray, out: np.ndarray, arg: np.ndarray) -> tuple[float, float]:
+    def new_arg(self) -> np.ndarray:
+        """A zeroed array for the chosen action of every state (int8)."""
+        return np.zeros(self.n_vars, dtype=np.int8)
+
+    def new_work(self) -> None:
+        """No scratch array: the sweeps keep their buffers per thread, a block at a time."""
+        return None
+
+    def evaluator(self, work: np.ndarray | None = None) -> PolicySweeps:
+        """Evaluation sweeps of one policy at a time (in place: nothing to pack)."""
+        return PolicySweeps(self)
+
+    def sweep_max(
+        self,
+        v: np.ndarray,
+        out: np.ndarray,
+        arg: np.ndarray,
+        *,
+        work: np.ndarray | None = None,
+        nchunks: int | None = None,
+    ) -> tuple[float, float]:
         """``out = T v``, the first maximising action in ``arg`` (int8); returns the min and
-        max of ``out - v``."""
-        args = (*self._common(), v, out, arg, self.nchunks(), self._block)
-        lo, hi = self._timed("max", _sweep_max_kernel, args)
+        max of ``out - v`` (``work`` is unused; ``nchunks`` default :meth:`nchunks`)."""
+        nc = self.nchunks() if nchunks is None else nchunks
+        lo, hi = _sweep_max_kernel(*self._common(), v, out, arg, nc, self._block)
         return float(lo), float(hi)
 
-    def sweep_policy(self, act: np.ndarray, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:
-        """``out = T_pi v`` for the actions ``act`` (int8); returns min and max of ``out - v``."""
-        args = (*self._common(), act, v, out, self.nchunks(), self._block)
-        lo, hi = self._timed("policy", _sweep_policy_kernel, args)
+    def sweep_policy(
+        self,
+        sel: np.ndarray,
+        v: np.ndarray,
+        out: np.ndarray,
+        *,
+        work: np.ndarray | None = None,
+        nchunks: int | None = None,
+    ) -> tuple[float, float]:
+        """``out = T_pi v`` for the actions ``sel`` (int8); returns min and max of ``out - v``."""
+        nc = self.nchunks() if nchunks is None else nchunks
+        lo, hi = _sweep_policy_kernel(*self._common(), sel, v, out, nc, self._block)
         return float(lo), float(hi)
 
-    def _timed(self, kind: str, kernel: Any, args: tuple[Any, ...]) -> Any:
-        """Run a sweep kernel on the thread count :func:`_adaptive_threads` chose."""
-        if self._choice is None:
-            return kernel(*args)
-        k = self._choice.start(kind)
-        t = time.perf_counter()
-        out = kernel(*args)
-        self._choice.stop(kind, k, time.perf_counter() - t)
-        return out
-
+    # ------------------------------------------------------------------ passes
     def labels(self) -> np.ndarray:
         """The partition of every state, int32 (computed, as the model's :meth:`partition`)."""
         out = np.empty(self.n_vars, dtype=np.int32)
@@ -782,61 +799,123 @@ class MatrixFreePatrol:
             raise ValidationError(f"policy[{x}] = {int(act[x])} is not allowed in state {x}")
         return act
 
+    def greedy_gap(
+        self,
+        vstar: np.ndarray,
+        pistar: np.ndarray,
+        w_low: np.ndarray,
+        v_up: np.ndarray,
+        loss_tol: float,
+        tie_rtol: float = GREEDY_TIE_RTOL,
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """One pass: ``pi_s`` greedy w.r.t. the lifted ``w_low`` and the gap statistics.
+
+        Parameters
+        ----------
+        vstar : ndarray
+            ``V*`` over the states.
+        pistar : ndarray of int
+            ``V*``'s policy (counts where ``pi_s`` differs from it).
+        w_low, v_up : ndarray
+            Lower and upper bounds per partition.
+        loss_tol : float
+            A one-step loss ``max_u Q*(x, u) - Q*(x, pi_s(x))`` above it counts as
+            certainly suboptimal.
+        tie_rtol : float
+            Ties as in :func:`lpbounds.greedy_policy` (lowest action among them).
+
+        Returns
+        -------
+        pi_s : ndarray of int8
+        stats : dict
+            ``upper_*`` (``v_up - V*``), ``lower_*`` (``V* - w_low``), ``gap_*``
+            (``v_up - w_low``): max, mean, min with its state; ``optimal``, ``differs``,
+            ``suboptimal`` (state counts) and ``max_one_step_loss``.
+        """
+        labels = self.labels()
+        nch = self.nchunks()
+        f = np.empty((nch, 9))
+        st = np.empty((nch, 5), dtype=np.int64)
+        pi_s = np.empty(self.n_vars, dtype=np.int8)
+        _greedy_gap_kernel(
+            *self._common(),
+            vstar,
+            labels,
+            np.ascontiguousarray(w_low, dtype=np.float64),
+            np.ascontiguousarray(v_up, dtype=np.float64),
+            np.ascontiguousarray(pistar, np.int8),
+            float(tie_rtol),
+            float(loss_tol),
+            pi_s,
+            f,
+            st,
+            nch,
+            self._block,
+        )
+        del labels
+        return pi_s, _reduce_greedy(f, st, self.n_vars)
+
+    def vsub_stats(self, vstar: np.ndarray, vsub: np.ndarray, w_low: np.ndarray) -> dict[str, Any]:
+        """Max, mean and min of ``vstar - vsub`` and the smallest ``vsub - w_low`` (the lifted
+        lower bound), each with its state, in one pass."""
+        nch = self.nchunks()
+        f = np.empty((nch, 4))
+        st = np.empty((nch, 3), dtype=np.int64)
+        _vsub_kernel(
+            self._geo,
+            self._stations,
+            self._sp,
+            vstar,
+            vsub,
+            np.ascontiguousarray(w_low, dtype=np.float64),
+            f,
+            st,
+            nch,
+            self._block,
+        )
+        c_max = int(np.argmax(f[:, _S_MAX]))
+        c_min = int(np.argmin(f[:, _S_MIN]))
+        c_low = int(np.argmin(f[:, _S_LOW_MIN]))
+        return {
+            "max": float(f[c_max, _S_MAX]),
+            "argmax": int(st[c_max, _J_ARGMAX]),
+            "mean": float(f[:, _S_SUM].sum() / self.n_vars),
+            "min": float(f[c_min, _S_MIN]),
+            "argmin": int(st[c_min, _J_ARGMIN]),
+            "low_min": float(f[c_low, _S_LOW_MIN]),
+            "low_argmin": int(st[c_low, _J_LOW_ARGMIN]),
+        }
+
+
+def _reduce_greedy(f: np.ndarray, st: np.ndarray, n: int) -> dict[str, Any]:
+    """Merge the greedy pass's per-chunk statistics (:meth:`MatrixFreePatrol.greedy_gap`)."""
+    up_c = int(np.argmin(f[:, _F_UP_MIN]))
+    low_c = int(np.argmin(f[:, _F_LOW_MIN]))
+    up_mean = float(f[:, _F_UP_SUM].sum() / n)
+    low_mean = float(f[:, _F_LOW_SUM].sum() / n)
+    gap_mean = float(f[:, _F_GAP_SUM].sum() / n)
+    return {
+        "upper_max": float(f[:, _F_UP_MAX].max()),
+        "upper_mean": up_mean,
+        "upper_min": float(f[up_c, _F_UP_MIN]),
+        "upper_argmin": int(st[up_c, _I_UP_ARGMIN]),
+        "lower_max": float(f[:, _F_LOW_MAX].max()),
+        "lower_mean": low_mean,
+        "lower_min": float(f[low_c, _F_LOW_MIN]),
+        "lower_argmin": int(st[low_c, _I_LOW_ARGMIN]),
+        "gap_max": float(f[:, _F_GAP_MAX].max()),
+        "gap_mean": gap_mean,
+        "upper_share": up_mean / gap_mean if gap_mean > 0 else float("nan"),
+        "lower_share": low_mean / gap_mean if gap_mean > 0 else float("nan"),
+        "optimal": int(st[:, _I_OPTIMAL].sum()),
+        "differs": int(st[:, _I_DIFFERS].sum()),
+        "suboptimal": int(st[:, _I_SUBOPT].sum()),
+        "max_one_step_loss": float(f[:, _F_LOSS_MAX].max()),
+    }
+
 
 # ---------------------------------------------------------------------- solvers
 Callback = Callable[[int, float], None]
-
-
-@contextmanager
-def _adaptive_threads(mf: MatrixFreePatrol) -> Iterator[None]:
-    """The sweeps of one solve on one thread or all, as the array path's loop chooses
-    (:class:`lpbounds.dp._ThreadChoice`: timed, re-checked as the load changes; small
-    models on one thread, :func:`lpbounds.dp._threads_for`). No number changes."""
-    ops = cast(Any, mf)  # duck-typed: compiled, n_rows, n_outcomes
-    with _threads_for(ops):
-        mf._choice = _ThreadChoice(ops)
-        try:
-            yield
-        finally:
-            mf._choice.restore()
-            mf._choice = None
-
-
-@dataclass
-class MatrixFreeSolution:
-    """``V*`` from :func:`solve_vstar`: :class:`lpbounds.dp.DPResult`'s fields without the
-    row indices (there are no rows); the policy is int8.
-
-    Attributes
-    ----------
-    values : ndarray
-        ``V``, within ``error_bound`` of ``V*`` in the max norm.
-    policy : ndarray of int8
-        Greedy w.r.t. ``values`` (first maximising action).
-    residual : float
-        ``||T values - values||_inf`` measured on the returned vector.
-    error_bound : float
-        ``(residual + slack) / (1 - lambda)`` (:func:`lpbounds.tolerances.error_bound`).
-    tol, iterations, sweeps, seconds, status, history
-        As in :class:`lpbounds.dp.DPResult`.
-    """
-
-    values: np.ndarray
-    policy: np.ndarray
-    residual: float
-    error_bound: float
-    tol: float
-    iterations: int
-    sweeps: int
-    seconds: float
-    status: Status
-    method: str = "mpi"
-    history: list[float] = field(default_factory=list)
-
-    @property
-    def converged(self) -> bool:
-        """``status is Status.OPTIMAL``."""
-        return self.status is Status.OPTIMAL
 
 
 def _absmax(v: np.ndarray) -> float:
@@ -844,7 +923,11 @@ def _absmax(v: np.ndarray) -> float:
     return max(abs(float(v.max(initial=0.0))), abs(float(v.min(initial=0.0))))
 
 
-def _check_finite(what: str, v: np.ndarray, res: float) -> float:
+def check_finite(what: str, v: np.ndarray, res: float) -> float:
+    """``max |v|``, or a ConvergenceError naming ``what`` when it or ``res`` is not finite.
+
+    No temporary of the vector's size (a 6-station vector is 4.3 GB).
+    """
     vmax = _absmax(v)
     if not (np.isfinite(vmax) and np.isfinite(res)):
         raise ConvergenceError(
@@ -861,9 +944,9 @@ def solve_vstar(
     tol: float | None = None,
     callback: Callback | None = None,
     raise_on_failure: bool = True,
-) -> MatrixFreeSolution:
-    """``V*`` by modified policy iteration from 0: :func:`lpbounds.solve_exact`'s iteration
-    (same numbers, bit for bit), in two value vectors.
+) -> DPResult:
+    """``V*`` by modified policy iteration from 0: :func:`lpbounds.solve_exact`'s loop
+    (:func:`lpbounds.dp.mpi_loop`: same numbers, bit for bit), in two value vectors.
 
     Parameters
     ----------
@@ -882,74 +965,18 @@ def solve_vstar(
 
     Returns
     -------
-    MatrixFreeSolution
+    DPResult
+        ``policy`` is int8 (the first maximising action), and ``policy_rows`` is the same
+        array: the operator's choices are its actions (it stores no rows).
     """
     t0 = time.perf_counter()
-    eval_sweeps = _check_eval_sweeps(eval_sweeps)
+    eval_sweeps = check_eval_sweeps(eval_sweeps)
     max_iter = check_int("max_iter", max_iter, lo=1)
     tol_ = mf.default_tol() if tol is None else float(tol)
     if not tol_ > 0:
         raise ValidationError(f"tol must be a positive number; got {tol!r}")
-    with _adaptive_threads(mf):
-        u, arg, res, its, sweeps, ok, hist = _mpi(mf, tol_, max_iter, eval_sweeps, callback)
-    vmax = _check_finite("matrix-free MPI", u, res)
-    if not ok and raise_on_failure:
-        raise ConvergenceError(
-            f"mpi stopped after {its} iterations with residual {res:.3e} > tol {tol_:.3e}"
-        )
-    return MatrixFreeSolution(
-        values=u,
-        policy=arg,
-        residual=res,
-        error_bound=error_bound(res, vmax, mf.modulus()),
-        tol=tol_,
-        iterations=its,
-        sweeps=sweeps,
-        seconds=time.perf_counter() - t0,
-        status=Status.OPTIMAL if ok else Status.ITERATION_LIMIT,
-        history=hist,
-    )
-
-
-def _mpi(
-    mf: MatrixFreePatrol,
-    tol: float,
-    max_iter: int,
-    eval_sweeps: int | Literal["auto"],
-    callback: Callback | None,
-) -> tuple[np.ndarray, np.ndarray, float, int, int, bool, list[float]]:
-    """:func:`lpbounds.dp._iterate`'s loop (MPI, Porteus shift as a scalar offset) in two
-    vectors: the result is formed in place."""
-    shift = PorteusShift(mf.discount, mf.row_sums())
-    u = np.zeros(mf.n_vars)
-    buf = mf.new_vector()
-    arg = np.zeros(mf.n_vars, dtype=np.int8)
-    hist: list[float] = []
-    sweeps, c, ok, its, res = 0, 0.0, False, max_iter, np.inf
-    plan = _EvalPlan(eval_sweeps)
-    for it in range(max_iter + 1):
-        lo, hi = mf.sweep_max(u, buf, arg)
-        sweeps += 1
-        res, c_next = shift.step(c, lo, hi, True)
-        hist.append(res)
-        if callback is not None:
-            callback(it, res)
-        if res <= tol:
-            ok, its = True, it
-            break
-        if it == max_iter:
-            break
-        u, buf = buf, u
-        c = shift.settle(u, c_next)
-        for _ in range(plan.count(arg)):
-            lo, hi = mf.sweep_policy(arg, u, buf)
-            sweeps += 1
-            _, c_next = shift.step(c, lo, hi, True)
-            u, buf = buf, u
-            c = shift.settle(u, c_next)
-    del buf
-    u += c  # the array path's u + c, in place
-    return u, arg, res, its, sweeps, ok, hist
+    run = mpi_loop(mf, np.zeros(mf.n_vars), tol_, max_iter, eval_sweeps, True, callback)
+    return run.finish("mpi", run.arg, run.arg, tol_, mf.modulus(), t0, raise_on_failure)
 
 
 def evaluate_policy(
@@ -961,7 +988,8 @@ def evaluate_policy(
     callback: Callback | None = None,
 ) -> PolicyEvaluation:
     """``V_pi`` by extrapolated evaluation sweeps: :func:`lpbounds.evaluate_policy`'s
-    iterative method (same numbers, bit for bit), in two value vectors.
+    iterative method (:func:`lpbounds.dp.evaluation_loop`: same numbers, bit for bit), in
+    two value vectors.
 
     The residual is measured by one more sweep on the returned vector; the error bound is
     :func:`lpbounds.tolerances.error_bound` of it. ``callback(sweep, residual)``, if given,
@@ -977,44 +1005,16 @@ def evaluate_policy(
     t0 = time.perf_counter()
     act = mf.check_policy(policy)
     tol_ = mf.default_tol() if tol is None else float(tol)
-    with _adaptive_threads(mf):
-        u, res, sweeps = _evaluate(mf, act, tol_, max_sweeps, callback)
-    vmax = _check_finite("matrix-free policy evaluation", u, res)
+    run = evaluation_loop(mf, act, tol_, max_sweeps, callback)
+    res = run.residual
+    vmax = check_finite("matrix-free policy evaluation", run.values, res)
     if res > tol_:
         raise ConvergenceError(f"policy evaluation stopped with residual {res:.3e} > {tol_:.3e}")
     return PolicyEvaluation(
-        values=u,
+        values=run.values,
         residual=res,
         error_bound=error_bound(res, vmax, mf.modulus()),
         method="iterative (matrix-free)",
-        sweeps=sweeps,
+        sweeps=run.sweeps,
         seconds=time.perf_counter() - t0,
     )
-
-
-def _evaluate(
-    mf: MatrixFreePatrol,
-    act: np.ndarray,
-    tol: float,
-    max_sweeps: int,
-    callback: Callback | None = None,
-) -> tuple[np.ndarray, float, int]:
-    """:func:`lpbounds.dp._evaluate_iterative`'s loop in two vectors, and the residual
-    measured by one more sweep on the returned vector."""
-    shift = PorteusShift(mf.discount, mf.row_sums())
-    u = np.zeros(mf.n_vars)
-    buf = mf.new_vector()
-    c, sweeps = 0.0, 0
-    while True:
-        lo, hi = mf.sweep_policy(act, u, buf)
-        sweeps += 1
-        res, c_next = shift.step(c, lo, hi, True)
-        if callback is not None:
-            callback(sweeps, res)
-        if res <= tol or sweeps >= max_sweeps:
-            break
-        u, buf = buf, u
-        c = shift.settle(u, c_next)
-    u += c
-    lo, hi = mf.sweep_policy(act, u, buf)  # measured on the returned vector
-    return u, max(-lo, hi), sweeps
