@@ -1,4 +1,11 @@
-"""Exact DP against closed forms, a direct linear solve, and plain-numpy references."""
+"""Exact DP against closed forms, a direct linear solve, and plain-numpy references.
+
+Every result's certificate is held to its promise both ways (``tests/_independent``, numpy
+only): the true error against an independent ``V*`` is within ``error_bound``, AND
+``error_bound`` is no larger than the residual of the returned vector (recomputed there)
+implies, ``(residual + rounding) / (1 - lambda)``; an OPTIMAL result's bound is within
+``(tol + rounding) / (1 - lambda)``. So neither a wrong bound nor an inflated one passes.
+"""
 
 from __future__ import annotations
 
@@ -13,9 +20,29 @@ import lpbounds as lb
 from lpbounds.dp import exact_rows
 from lpbounds.errors import ConvergenceError, ValidationError
 
+from . import _independent as ind
 from .conftest import reference_bellman, reference_solve, two_state_closed_form, two_state_mdp
 
 METHODS = ["mpi", "vi", "pi"]
+
+
+def dense(mdp):
+    """``(P, R, allowed, discount)`` of ``mdp`` as the arrays of tests/_independent."""
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    return P, mdp.rewards, mdp.allowed, mdp.discount
+
+
+def check_dp(res, mdp, reference=None, reference_err=None, what=""):
+    """``res`` (a DPResult of ``mdp``) both ways, against V* by dense policy iteration
+    unless a reference is given (tests/_independent.assert_dp_certificate)."""
+    tv = ind.successor_bellman(mdp.successors, mdp.probabilities_full(), mdp.rewards,
+                               mdp.allowed, mdp.discount, res.values)  # fmt: skip
+    if reference is None:
+        ref = ind.policy_iteration(*dense(mdp))
+        reference, reference_err = ref.values, ref.error
+    ind.assert_dp_certificate(
+        res, tv, mdp.discount, reference=reference, reference_err=reference_err or 0.0, what=what
+    )
 
 
 def direct_policy_value(mdp, policy):
@@ -34,6 +61,8 @@ def test_two_state_closed_form(method, discount):
     want = two_state_closed_form(discount)
     np.testing.assert_allclose(res.values, want, rtol=1e-9, err_msg=f"{method} lam={discount}")
     assert res.residual <= res.tol
+    # the closed form is exact up to one rounding: its own error a few ulps
+    check_dp(res, two_state_mdp(discount), want, 4 * np.finfo(float).eps * want.max(), method)
     # at lam = 0.5 staying (1/(1-lam) = 2) beats moving (lam * 4 = 2)? a tie: lowest action
     expected_action = 0 if 1.0 / (1 - discount) >= discount * 2 / (1 - discount) else 1
     assert res.policy[0] == expected_action
@@ -51,8 +80,10 @@ def test_two_state_chain_with_probabilities():
         res = lb.solve_exact(mdp, m)
         err = np.abs(res.values - [v0, v1]).max()
         assert err <= res.error_bound, (m, err, res.error_bound)
+        check_dp(res, mdp, np.array([v0, v1]), 1e-14 * v1, m)
         tight = lb.solve_exact(mdp, m, tol=1e-13)
         np.testing.assert_allclose(tight.values, [v0, v1], rtol=1e-12)
+        check_dp(tight, mdp, np.array([v0, v1]), 1e-14 * v1, m)
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -60,9 +91,11 @@ def test_methods_agree_with_direct_solve(seed):
     mdp = lb.garnet(80, 3, 4, 0.95, seed=seed, allowed_fraction=0.7)
     results = {m: lb.solve_exact(mdp, m) for m in METHODS}
     ref = reference_solve(mdp)
+    indep = ind.policy_iteration(*dense(mdp))
     for m, res in results.items():
         assert res.converged
         assert np.abs(res.values - ref).max() <= res.error_bound + 1e-10, m
+        check_dp(res, mdp, indep.values, indep.error, m)
         # the reported residual is the true residual of the returned vector
         q = reference_bellman(mdp, res.values)
         assert np.abs(q.max(axis=1) - res.values).max() == pytest.approx(res.residual, abs=1e-12)
@@ -80,6 +113,7 @@ def test_error_bound_bounds_the_error(method):
         err = np.abs(res.values - exact).max()
         assert res.residual <= tol
         assert err <= res.error_bound * (1 + 1e-12), (tol, err, res.error_bound)
+        check_dp(res, mdp, what=f"{method} tol={tol}")  # and no looser than the residual
         # and the lambda/(1-lambda) bound holds for one more application of T
         tv = reference_bellman(mdp, res.values).max(axis=1)
         assert np.abs(tv - exact).max() <= 0.9 / 0.1 * res.residual * (1 + 1e-12)
@@ -92,6 +126,8 @@ def test_extrapolation_reduces_sweeps_not_accuracy():
     assert fast.sweeps < plain.sweeps / 5
     exact = reference_solve(mdp)
     assert np.abs(fast.values - exact).max() <= fast.error_bound
+    check_dp(fast, mdp, what="vi extrapolated")
+    check_dp(plain, mdp, what="vi plain")
 
 
 def test_convergence_error_names_the_residual():
@@ -100,6 +136,7 @@ def test_convergence_error_names_the_residual():
         lb.solve_exact(mdp, "vi", max_iter=2, extrapolate=False)
     res = lb.solve_exact(mdp, "vi", max_iter=2, extrapolate=False, raise_on_failure=False)
     assert not res.converged and res.residual > res.tol
+    check_dp(res, mdp, what="stopped at max_iter")  # wide, but exactly as its residual says
 
 
 def test_bad_arguments():
@@ -124,6 +161,12 @@ def test_policy_evaluation(method):
     want = direct_policy_value(mdp, pol)
     assert np.abs(ev.values - want).max() <= ev.error_bound + 1e-12
     assert ev.residual <= 1e-10 * mdp.reward_absmax / 0.1 + 1e-15
+    # both ways against V_pi by a dense solve (tests/_independent), at the default tol
+    ref = ind.policy_value(dense(mdp)[0], mdp.rewards, pol, 0.9)
+    t_pi = ind.policy_operator(mdp.successors, mdp.probabilities_full(), mdp.rewards, pol,
+                               0.9, ev.values)  # fmt: skip
+    ind.assert_dp_certificate(ev, t_pi, 0.9, reference=ref.values, reference_err=ref.error,
+                              tol=1e-10 * mdp.reward_absmax / 0.1, what=method)  # fmt: skip
 
 
 def test_greedy_tie_rule_lowest_action():
@@ -152,6 +195,42 @@ def test_porteus_bounds_sandwich():
     assert np.all(pb.lower <= v_pi + tol)
     assert np.all(v_pi <= exact + tol)
     assert np.all(exact <= pb.upper + tol)
+    check_porteus(mdp, v, pb)
+
+
+def check_porteus(mdp, v, pb):
+    """The Porteus bounds both ways, from an independent dense V* and V_pi and the formulas
+    recomputed here: ``lower = T_pi V + lambda/(1-lambda) min(T_pi V - V) <= V_pi <= V* <=
+    upper = T V + lambda/(1-lambda) max(T V - V)``, and no wider than those formulas up to
+    rounding (a bracket of +-inf, or a doubled tail, fails)."""
+    P, R, allowed, lam = dense(mdp)
+    vstar = ind.policy_iteration(P, R, allowed, lam)
+    vpi = ind.policy_value(P, R, pb.policy, lam)
+    assert np.isfinite(pb.lower).all() and np.isfinite(pb.upper).all()
+    assert (pb.lower <= vpi.values + vpi.error).all(), "Porteus lower bound above V_pi"
+    assert (vpi.values <= vstar.values + vstar.error + vpi.error).all()
+    assert (vstar.values - vstar.error <= pb.upper).all(), "Porteus upper bound below V*"
+    tv = ind.bellman(P, R, allowed, lam, v)
+    tpi = ind.policy_operator(mdp.successors, mdp.probabilities_full(), R, pb.policy, lam, v)
+    k = lam / (1 - lam)
+    slack = ind.rounding_slack(R, np.r_[v, tv], mdp.n_outcomes) / (1 - lam)
+    assert (pb.upper <= tv + k * (tv - v).max() + slack).all(), "upper wider than Porteus"
+    assert (pb.lower >= tpi + k * (tpi - v).min() - slack).all(), "lower wider than Porteus"
+    paper = v + (tpi - v).min() / (1 - lam)
+    assert (pb.lower_paper >= paper - slack).all() and (pb.lower_paper <= paper + slack).all()
+    # the width is what the span of T V - V makes it: tight
+    width = float((pb.upper - pb.lower).max())
+    span = float((tv - v).max() - (tpi - v).min())
+    assert width <= float((tv - tpi).max()) + k * span + 2 * slack
+
+
+def test_porteus_bounds_at_vstar_are_tight():
+    """At (an accurate) V* the bounds close to the rounding allowance around V*."""
+    mdp = lb.garnet(60, 3, 3, 0.9, seed=12)
+    ref = ind.policy_iteration(*dense(mdp))
+    pb = lb.porteus_bounds(mdp, ref.values)
+    check_porteus(mdp, ref.values, pb)
+    assert float((pb.upper - pb.lower).max()) <= 2 * ref.error
 
 
 def test_solve_on_rows_equals_aggregated_fixed_point_definition(small_mdp, small_partition):
@@ -161,6 +240,12 @@ def test_solve_on_rows_equals_aggregated_fixed_point_definition(small_mdp, small
     assert np.abs(tv - fp.values).max() == pytest.approx(fp.residual, abs=1e-13)
     # an upper bound on V* (Lemma 3 / Theorem 1)
     assert np.all(small_partition.lift(fp.values) >= reference_solve(small_mdp) - fp.error_bound)
+    # the certificate both ways against RLP's v* by dense policy iteration over its rows
+    P, R, allowed, lam = dense(small_mdp)
+    labels = small_partition.labels
+    ref = ind.rlp_optimum(P, R, allowed, lam, labels)
+    t = ind.rlp_operator(P, R, allowed, lam, labels, fp.values)
+    ind.assert_dp_certificate(fp, t, lam, reference=ref.values, reference_err=ref.error)
 
 
 def test_game_value_is_below_min_vstar(small_mdp, small_partition):
@@ -170,6 +255,12 @@ def test_game_value_is_below_min_vstar(small_mdp, small_partition):
     assert np.abs(gw - g.values).max() <= g.tol
     vmin = small_partition.aggregate(reference_solve(small_mdp), "min")
     assert np.all(g.values <= vmin + g.error_bound)
+    # the certificate both ways against w* by strategy iteration (tests/_independent)
+    P, R, allowed, lam = dense(small_mdp)
+    labels = small_partition.labels
+    ref = ind.nlp_optimum(P, R, allowed, lam, labels)
+    t = ind.nlp_operator(P, R, allowed, lam, labels, g.values)
+    ind.assert_dp_certificate(g, t, lam, reference=ref.values, reference_err=ref.error)
 
 
 @settings(max_examples=20, deadline=None)
@@ -183,9 +274,11 @@ def test_game_value_is_below_min_vstar(small_mdp, small_partition):
 def test_property_all_methods_agree(n, a, ll, lam, seed):
     mdp = lb.garnet(n, a, ll, lam, seed=seed, allowed_fraction=0.75)
     ref = reference_solve(mdp)
+    indep = ind.policy_iteration(*dense(mdp))
     for m in METHODS:
         res = lb.solve_exact(mdp, m)
         assert np.abs(res.values - ref).max() <= res.error_bound + 1e-9 * max(1, abs(ref).max())
+        check_dp(res, mdp, indep.values, indep.error, m)
 
 
 @settings(max_examples=20, deadline=None)
@@ -203,12 +296,14 @@ def test_property_every_eval_sweeps_is_certified(n, a, ll, lam, frac, seed):
     direct solve, and its reported residual is the true one of the returned vector."""
     mdp = lb.garnet(n, a, ll, lam, seed=seed, allowed_fraction=frac)
     ref = reference_solve(mdp)
+    indep = ind.policy_iteration(*dense(mdp))
     for m in ("auto", 0, 1, 5, 20):
         res = lb.solve_exact(mdp, eval_sweeps=m)
         assert res.converged and res.residual <= res.tol
         assert np.abs(res.values - ref).max() <= res.error_bound + 1e-9 * max(1, abs(ref).max())
         q = reference_bellman(mdp, res.values)
         assert np.abs(q.max(axis=1) - res.values).max() == pytest.approx(res.residual, abs=1e-12)
+        check_dp(res, mdp, indep.values, indep.error, f"eval_sweeps={m}")
 
 
 def test_auto_eval_sweeps_waits_for_a_settled_policy():
@@ -236,6 +331,13 @@ def test_auto_eval_sweeps_waits_for_a_settled_policy():
     extra = res.sweeps - (res.iterations + 1)
     assert extra % AUTO_EVAL_SWEEPS == 0 and 0 < extra < AUTO_EVAL_SWEEPS * res.iterations
     assert seen == list(range(res.iterations + 1))
+    # 3,000 states: the certificate against V* by value iteration on the successor arrays
+    ref = ind.fixed_point(
+        lambda v: ind.successor_bellman(mdp.successors, mdp.probabilities_full(),
+                                        mdp.rewards, mdp.allowed, 0.95, v),
+        res.values, 0.95,
+    )  # fmt: skip
+    check_dp(res, mdp, ref.values, ref.error, "auto")
 
 
 # ---------------------------------------------------------------------- issue 10 item 4
@@ -254,6 +356,8 @@ def test_status_is_the_single_source_of_truth():
     assert cut.residual > cut.tol
     # the bound stays valid at the limit: V* from an independent solve is within it
     assert np.abs(cut.values - reference_solve(mdp)).max() <= cut.error_bound
+    check_dp(done, mdp, what="done")
+    check_dp(cut, mdp, what="cut")  # valid and exactly as wide as the residual makes it
     assert "converged" not in {f.name for f in dataclasses.fields(lb.DPResult)}
     game = lb.solve_game(lb.BellmanRows.aggregate(mdp, lb.random_partition(30, 4)))
     assert game.status is Status.OPTIMAL and game.converged
@@ -278,6 +382,7 @@ def test_values_near_the_float64_limit_are_exact_not_zero():
             # the promise: within error_bound (about 1e-9 relative at the default tol)
             assert np.abs(res.values - want).max() <= res.error_bound, method
             assert res.error_bound <= 1e-8 * np.abs(want).max(), method
+            check_dp(res, mdp, want, 4 * np.finfo(float).eps * np.abs(want).max(), method)
 
 
 @pytest.mark.parametrize("scale", [1e307, 1e308, -1e308])

@@ -8,7 +8,10 @@ compare both with plain-numpy references from ``conftest``.
 
 Every test runs twice, on the numpy twins of the kernels (what small models use) and on
 the compiled kernels (what large ones use; :mod:`lpbounds._backend`), and the tests at the
-end compare the two paths with each other, bit for bit.
+end compare the two paths with each other, bit for bit. Identical numbers could still be
+identically wrong, so each result's certificate is also held to its promise both ways
+against ``tests/_independent`` (numpy only): the true error within ``error_bound``, and
+``error_bound`` no larger than the residual recomputed there implies.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from lpbounds.dp import exact_rows, post_decision_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
 from lpbounds.rows import PostDecisionRows
 
+from . import _independent as ind
 from .conftest import reference_bellman, reference_solve
 
 NUMPY = 10**18  # SMALL_READS that sends every model to the numpy twins
@@ -67,6 +71,30 @@ PATROLS = [
 ]
 
 
+def check_dp(res, mdp: lb.FiniteMDP, what: str = "") -> None:
+    """``res`` (a DPResult of ``mdp``) both ways, V* by value iteration on the successor
+    arrays from ``res.values`` to 1e-14 (tests/_independent, with its own error bound)."""
+    succ, p = mdp.successors, mdp.probabilities_full()
+
+    def op(v):
+        return ind.successor_bellman(succ, p, mdp.rewards, mdp.allowed, mdp.discount, v)
+
+    ref = ind.fixed_point(op, res.values, mdp.discount)
+    ind.assert_dp_certificate(res, op(res.values), mdp.discount, reference=ref.values,
+                              reference_err=ref.error, what=what)  # fmt: skip
+
+
+def check_evaluation(ev, mdp: lb.FiniteMDP, policy, what: str = "") -> None:
+    """A PolicyEvaluation both ways at the default tolerance ``1e-10 max|R| / (1 - lambda)``,
+    V_pi by a dense solve (tests/_independent.policy_value)."""
+    succ, p, lam = mdp.successors, mdp.probabilities_full(), mdp.discount
+    ref = ind.policy_value(ind.dense_transitions(succ, p), mdp.rewards, policy, lam)
+    t = ind.policy_operator(succ, p, mdp.rewards, policy, lam, ev.values)
+    tol = 1e-10 * float(np.abs(mdp.rewards[mdp.allowed]).max()) / (1 - lam)
+    ind.assert_dp_certificate(ev, t, lam, reference=ref.values, reference_err=ref.error,
+                              tol=tol, what=what)  # fmt: skip
+
+
 def assert_same_result(fast: lb.DPResult, plain: lb.DPResult, rows: lb.BellmanRows) -> None:
     assert np.array_equal(fast.values, plain.values), "fast path values differ from plain"
     assert np.array_equal(fast.policy_rows, plain.policy_rows), "policy rows differ"
@@ -94,6 +122,7 @@ def test_patrol_fast_solve_equals_plain_bit_for_bit(kw, method):
     q = reference_bellman(mdp, fast.values)
     true_res = np.abs(q.max(axis=1) - fast.values).max()
     assert true_res == pytest.approx(fast.residual, abs=1e-13), "residual not the true one"
+    check_dp(fast, mdp, method)
 
 
 @pytest.mark.usefixtures("kernel_path")
@@ -106,9 +135,9 @@ def test_random_post_decision_mdp_equals_plain(seed, allowed_fraction):
     rows = exact_rows(mdp)
     for method in ("vi", "mpi"):
         kw = {"eval_sweeps": 3, "tol": 1e-9, "initial": np.linspace(-1, 1, 300)}
-        assert_same_result(
-            lb.solve_exact(mdp, method, **kw), lb.solve_exact(rows, method, **kw), rows
-        )
+        fast = lb.solve_exact(mdp, method, **kw)
+        assert_same_result(fast, lb.solve_exact(rows, method, **kw), rows)
+        check_dp(fast, mdp, method)
     # the form's operator against the plain numpy Bellman operator
     v = np.random.default_rng(seed).normal(size=mdp.n_states)
     out = np.empty_like(v)
@@ -136,7 +165,9 @@ def test_reward_storage_variants_equal_plain(monkeypatch, max_codes):
     mdp.__dict__["_post_decision"] = ps
     rows = exact_rows(mdp)
     for method in ("vi", "mpi"):
-        assert_same_result(lb.solve_exact(mdp, method), lb.solve_exact(rows, method), rows)
+        fast = lb.solve_exact(mdp, method)
+        assert_same_result(fast, lb.solve_exact(rows, method), rows)
+        check_dp(fast, mdp, method)
 
 
 @pytest.mark.usefixtures("kernel_path")
@@ -199,6 +230,7 @@ def test_fast_policy_evaluation_matches_direct_solve(kw):
     want = spla.spsolve(sp.identity(n, format="csc") - mdp.discount * p_pi, R[np.arange(n), pol])
     err = np.abs(fast.values - want).max()
     assert err <= fast.error_bound + 1e-12, f"|V - V_pi| = {err} > bound {fast.error_bound}"
+    check_evaluation(fast, mdp, pol, "fast evaluation")
     plain = lb.evaluate_policy(
         exact_rows(mdp), exact_rows(mdp).pair_row[np.arange(n), pol], method="iterative"
     )
@@ -237,7 +269,9 @@ def test_property_fast_equals_plain(n, a, ll, lam, frac, seed):
     mdp = post_decision_mdp(n, a, ll, lam, seed, frac)
     rows = exact_rows(mdp)
     for method in ("vi", "mpi"):
-        assert_same_result(lb.solve_exact(mdp, method), lb.solve_exact(rows, method), rows)
+        fast = lb.solve_exact(mdp, method)
+        assert_same_result(fast, lb.solve_exact(rows, method), rows)
+        check_dp(fast, mdp, method)
 
 
 # ---------------------------------------------------------------------- numpy twins vs compiled
@@ -354,6 +388,8 @@ def test_numpy_solve_equals_compiled_bit_for_bit(monkeypatch, method, shared):
     ref = reference_solve(mdp)
     ref_err = np.abs(reference_bellman(mdp, ref).max(axis=1) - ref).max() / (1 - mdp.discount)
     assert np.abs(a.values - ref).max() <= a.error_bound + 1.01 * ref_err + 1e-13
+    check_dp(a, mdp, f"{method} numpy")
+    check_dp(b, mdp, f"{method} compiled")
 
 
 def test_numpy_post_decision_form_equals_compiled(monkeypatch):
@@ -378,6 +414,8 @@ def test_numpy_post_decision_form_equals_compiled(monkeypatch):
     assert np.array_equal(bits(ea.values), bits(eb.values)) and ea.residual == eb.residual
     assert da == db
     assert da == pytest.approx(ra.residual, rel=0, abs=1e-13)  # measured on u + c, not u
+    check_dp(ra, mdp, "mpi")
+    check_evaluation(ea, mdp, ra.policy, "iterative evaluation")
 
 
 def test_numpy_twins_of_the_helper_kernels_equal_compiled():
@@ -433,6 +471,7 @@ def test_property_numpy_equals_compiled(monkeypatch, n, a, ll, m, lam, shared, s
     (ra, sa, ta), (rb, sb, tb) = (on_path(monkeypatch, p, run) for p in ("numpy", "compiled"))
     assert_rows_identical(ra, rb)
     assert np.array_equal(bits(sa.values), bits(sb.values)) and sa.residual == sb.residual
+    check_dp(sa, mdp, "mpi")
     assert np.array_equal(bits(ta[0]), bits(tb[0])) and np.array_equal(ta[1], tb[1])
 
 
@@ -458,7 +497,8 @@ def test_compile_is_announced_once_per_group(monkeypatch, caplog):
 
 # ---------------------------------------------------------------------- thread choice
 def _numba_threads():
-    numba = pytest.importorskip("numba")
+    import numba  # a dependency of lpbounds (its compiled kernels): never skipped
+
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("numba has one thread here")
     return numba

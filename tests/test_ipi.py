@@ -1,7 +1,10 @@
 """Inexact policy iteration (``solve_exact(method="ipi")``) and its GMRES.
 
 References are independent of lpbounds' kernels: a dense Howard policy iteration with
-``numpy.linalg.solve`` (exact up to rounding) and dense matrix products.
+``numpy.linalg.solve`` (exact up to rounding) and dense matrix products. Each result's
+certificate is held to its promise both ways (``tests/_independent.assert_dp_certificate``):
+the true error is within ``error_bound`` and ``error_bound`` is no larger than the residual
+recomputed here implies (an OPTIMAL one within ``(tol + rounding) / (1 - lambda)``).
 """
 
 from __future__ import annotations
@@ -15,6 +18,8 @@ import lpbounds as lb
 from lpbounds import _krylov
 from lpbounds.dp import exact_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
+
+from . import _independent as ind
 
 
 def dense_model(mdp: lb.FiniteMDP) -> tuple[np.ndarray, np.ndarray]:
@@ -44,6 +49,18 @@ def howard(mdp: lb.FiniteMDP) -> np.ndarray:
         if not better.any():
             return v
         pol = np.where(better, q.argmax(axis=1), pol)
+
+
+def dense_bellman(mdp: lb.FiniteMDP, v: np.ndarray) -> np.ndarray:
+    big, r = dense_model(mdp)
+    return (r + mdp.discount * np.einsum("axy,y->xa", big, v)).max(axis=1)
+
+
+def check(res, mdp, vstar, what=""):
+    """The certificate both ways; ``vstar`` from :func:`howard` (exact to ~1e-13 relative)."""
+    slack = 1e-13 * max(1.0, float(np.abs(vstar).max()))
+    ind.assert_dp_certificate(res, dense_bellman(mdp, res.values), mdp.discount,
+                              reference=vstar, reference_err=slack, what=what)  # fmt: skip
 
 
 @settings(max_examples=40, deadline=None)
@@ -77,6 +94,8 @@ def test_ipi_agrees_with_pi_and_its_certificate_bounds_the_true_error(
     tv = (r + discount * np.einsum("axy,y->xa", big, ipi.values)).max(axis=1)
     assert np.abs(tv - ipi.values).max() == pytest.approx(ipi.residual, abs=1e-12 * scale)
     assert mdp.allowed[np.arange(n), ipi.policy].all()
+    check(ipi, mdp, vstar, "ipi")
+    check(pi, mdp, vstar, "pi")
 
 
 def test_error_bound_holds_at_loose_tolerances():
@@ -86,6 +105,7 @@ def test_error_bound_holds_at_loose_tolerances():
         res = lb.solve_exact(mdp, "ipi", tol=tol)
         assert res.residual <= tol
         assert np.abs(res.values - vstar).max() <= res.error_bound
+        check(res, mdp, vstar, f"tol={tol}")
 
 
 def test_post_decision_form_gives_the_numbers_of_the_rows():
@@ -98,6 +118,18 @@ def test_post_decision_form_gives_the_numbers_of_the_rows():
     assert fast.residual == plain.residual
     mpi = lb.solve_exact(mdp, "mpi")
     assert np.abs(fast.values - mpi.values).max() <= fast.error_bound + mpi.error_bound
+    # both against V* by value iteration on the successor arrays (the patrol model's 180
+    # states): valid, and no looser than their residuals
+    ref = ind.fixed_point(
+        lambda v: ind.successor_bellman(mdp.successors, mdp.probabilities_full(), mdp.rewards,
+                                        mdp.allowed, mdp.discount, v),
+        mpi.values, mdp.discount,
+    )  # fmt: skip
+    for res in (fast, plain, mpi):
+        t = ind.successor_bellman(mdp.successors, mdp.probabilities_full(), mdp.rewards,
+                                  mdp.allowed, mdp.discount, res.values)  # fmt: skip
+        ind.assert_dp_certificate(res, t, mdp.discount, reference=ref.values,
+                                  reference_err=ref.error, what=res.method)  # fmt: skip
 
 
 def test_iteration_limit_keeps_a_valid_certificate():
@@ -106,6 +138,7 @@ def test_iteration_limit_keeps_a_valid_certificate():
     res = lb.solve_exact(mdp, "ipi", max_iter=1, raise_on_failure=False)
     assert res.status is lb.Status.ITERATION_LIMIT
     assert np.abs(res.values - vstar).max() <= res.error_bound
+    check(res, mdp, vstar, "max_iter=1")  # wide, but exactly as its residual makes it
     with pytest.raises(lb.ConvergenceError, match="ipi stopped after 1 iterations"):
         lb.solve_exact(mdp, "ipi", max_iter=1)
 

@@ -168,9 +168,8 @@ def test_unavailable_formulation_noted(monkeypatch):
 
 def test_formulation_not_applicable_is_noted():
     # UBLP is for patrol instances: on a random MDP it is skipped with a note, not run
-    names, _ = available_formulations(["UBLP"])
-    if not names:
-        pytest.skip("lpbounds.patrol.bounds not on this branch yet")
+    names, notes = available_formulations(["UBLP"])
+    assert names == ["UBLP"], notes  # lpbounds.patrol.bounds must import: never a skip
     res = run_study(["garnet:20:4"], ["RLP", "UBLP"], ["HIGHS:simplex"], jobs=1)
     assert set(res.frame["formulation"]) == {"RLP"}
     assert any("UBLP" in n and "patrol" in n for n in res.notes), res.notes

@@ -11,7 +11,14 @@ import lpbounds as lb
 from lpbounds.errors import SolverError, SolverNotInstalledError, ValidationError
 from lpbounds.formulations import ALP, RLP, find_cost_dependent_alp
 
+from .. import _independent as ind
 from ._reference import transition_rows
+
+
+def _check(mdp, res, kind="ALP", **kw):
+    """The bracket of ``res`` against references computed here (see tests/_independent)."""
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    return ind.check_mdp_lp(res, kind, P, mdp.rewards, mdp.allowed, mdp.discount, **kw)
 
 
 def _linprog_alp(mdp, phi, cost):
@@ -34,9 +41,14 @@ def test_remark_2_example_is_cost_dependent_by_an_independent_solve():
     assert abs(ex.excess - worse) <= 1e-6 * max(1.0, abs(r1.fun))
     # while RLP (a 0/1 basis) on the same MDP does not depend on the cost (Theorem 1)
     part = lb.random_partition(ex.mdp.n_states, 2, seed=0)
-    v1 = RLP(ex.mdp, part, ex.cost1).solve().values
-    v2 = RLP(ex.mdp, part, ex.cost2).solve().values
-    assert np.abs(v1 - v2).max() <= 1e-8
+    res1 = RLP(ex.mdp, part, ex.cost1).solve()
+    res2 = RLP(ex.mdp, part, ex.cost2).solve()
+    assert np.abs(res1.values - res2.values).max() <= 1e-8
+    for res, cost in ((res1, ex.cost1), (res2, ex.cost2)):
+        assert _check(ex.mdp, res, "RLP", labels=part.labels, cost=cost) == "optimal"
+    # both ALP optima are certified upper bounds on V*, tight at their own points
+    for res, cost in ((ex.first, ex.cost1), (ex.second, ex.cost2)):
+        assert _check(ex.mdp, res, cost=cost) == "optimal"
 
 
 def test_sparse_and_dense_basis_agree():
@@ -45,6 +57,7 @@ def test_sparse_and_dense_basis_agree():
     a = ALP(mdp, phi).solve()
     b = ALP(mdp, sp.csr_matrix(phi)).solve()
     assert abs(a.objective - b.objective) <= 1e-9 * max(1, abs(a.objective))
+    assert _check(mdp, a) == _check(mdp, b) == "optimal"
 
 
 def test_infeasible_basis_is_reported():

@@ -23,6 +23,7 @@ from lpbounds.formulations.rows_lp import RowsLP
 from lpbounds.patrol import PatrolParams
 from lpbounds.patrol.bounds import LBLP, UBLP
 
+from .. import _independent as ind
 from ..conftest import reference_solve
 from . import test_lp_battery as battery
 from ._reference import transition_rows
@@ -71,13 +72,36 @@ NAMES = [
 ]  # fmt: skip
 
 
-def _within_certificate(res: lb.formulations.LPResult, ref: np.ndarray) -> None:
+def rows_apply(rows: lb.BellmanRows, v: np.ndarray) -> np.ndarray:
+    """``(T v)(i) = max over the rows of i`` by a plain numpy expression over the rows."""
+    targets = np.asarray(rows.targets, dtype=np.int64)
+    probs = np.broadcast_to(rows.probs, targets.shape)
+    q = rows.reward + rows.discount * (probs * v[targets]).sum(axis=1)
+    out = np.full(rows.n_vars, -np.inf)
+    np.maximum.at(out, np.asarray(rows.owner, dtype=np.int64), q)
+    return out
+
+
+def _within_certificate(res: lb.formulations.LPResult, ref: np.ndarray, form=None) -> str:
+    """The bracket contains the exact optimum; with ``form``, it is also as narrow as the
+    point's residual (recomputed over the rows here) allows and, OPTIMAL, within the
+    requested accuracy (tests/_independent.assert_bracket). Returns the status."""
     assert res.lower_values is not None and res.upper_values is not None
-    ref = ref[: res.values.size]  # IB: values are the first block v_1
     slack = 1e-12 * max(1.0, float(np.abs(ref).max()))  # the reference's own iteration error
+    if form is not None:
+        rows = form.rows
+        r_abs = float(np.abs(rows.reward).max())
+        return ind.assert_bracket(
+            res, point=res.x, t_point=rows_apply(rows, res.x), discount=rows.discount,
+            reward_absmax=r_abs, reward_floor=r_abs, n_terms=rows.n_outcomes, optimum=ref,
+            optimum_err=slack / (1 - rows.discount),
+            judged="both" if (form.c > 0).all() else "upper", what=form.name,
+        )  # fmt: skip
+    ref = ref[: res.values.size]  # IB: values are the first block v_1
     assert (res.lower_values <= ref + slack).all(), "exact optimum below the certified bracket"
     assert (ref <= res.upper_values + slack).all(), "exact optimum above the certified bracket"
     assert np.abs(res.values - ref).max() <= res.error_bound + slack
+    return str(res.status)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -89,6 +113,7 @@ def test_highspy_equals_cvxpy_and_the_fixed_point_within_the_certificate(name):
     assert direct.status is lb.Status.OPTIMAL and direct.solver == "HIGHS"
     for res in (via_cvxpy, direct):
         _within_certificate(res, ref)
+        assert _within_certificate(res, ref, form) == "optimal"
         battery._kkt(form, res, 1e-6)
     # the same point within both certificates, the same duals (objective = b'y, y >= 0)
     assert np.abs(direct.values - via_cvxpy.values).max() <= (
@@ -111,6 +136,9 @@ def test_cvxpy_hands_highs_the_rows_as_highspy_does(name):
     direct = form.solve("HIGHS", backend="highspy", **opts)
     assert via_cvxpy.iterations == direct.iterations
     assert via_cvxpy.objective == pytest.approx(direct.objective, rel=1e-12, abs=1e-12)
+    ref = rows_reference(form.rows)
+    for res in (via_cvxpy, direct):  # IPM without crossover: an interior point, still certified
+        _within_certificate(res, ref, form)
 
 
 def test_alp_highspy_agrees_with_a_second_solver():
@@ -122,6 +150,10 @@ def test_alp_highspy_agrees_with_a_second_solver():
     battery._kkt(form, direct, 1e-6)
     vstar = reference_solve(mdp)
     assert (direct.upper_values >= vstar - 1e-9).all()  # ALP's certified bound on V*
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    for res in (direct, other):
+        status = ind.check_mdp_lp(res, "ALP", P, mdp.rewards, mdp.allowed, 0.9)
+        assert status == "optimal"
 
 
 @pytest.mark.parametrize("backend", ["cvxpy", "highspy"])
@@ -137,6 +169,8 @@ def test_time_limit_keeps_the_point_and_a_valid_bracket(backend):
     ref = rows_reference(form.rows, tol=1e-12)
     assert (res.lower_values <= ref + 1e-9).all() and (ref <= res.upper_values + 1e-9).all()
     assert res.error_bound > 1e-6  # stopped early: the bracket is honest about it
+    # ... and no more than honest: exactly as wide as the point's residual makes it
+    assert _within_certificate(res, ref, form) == "time_limit"
 
 
 @pytest.mark.parametrize(
@@ -149,6 +183,7 @@ def test_policy_warm_start_same_optimum_in_no_iterations(name):
     assert res.status is lb.Status.OPTIMAL and res.extra["warm_start"] == "policy"
     assert res.iterations is not None and res.iterations <= 5
     _within_certificate(res, ref)
+    assert _within_certificate(res, ref, form) == "optimal"
     battery._kkt(form, res, 1e-6)
 
 

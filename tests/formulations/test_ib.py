@@ -11,7 +11,12 @@ import lpbounds as lb
 from lpbounds.errors import ValidationError
 from lpbounds.formulations import IB, LLP
 
+from .. import _independent as ind
 from ._reference import rlp_reference
+
+
+def _dense(mdp):
+    return ind.dense_transitions(mdp.successors, mdp.probabilities_full()), mdp.rewards
 
 
 def test_ib_rows_are_cyclic_copies_of_rlp_rows():
@@ -53,9 +58,13 @@ def test_every_ib_block_and_llp_dominate_vstar(n, seed, L, data):
     tol = 1e-6 * max(1.0, np.abs(vref).max())
     res = IB(mdp, part, L, cost).solve("HIGHS")
     assert (res.extra["blocks"] - vref).min() >= -tol, "an IB block is below v* (Theorem 2)"
+    P, R = _dense(mdp)
+    ind.check_mdp_lp(res, "IB", P, R, mdp.allowed, 0.85, labels=part.labels, cost=cost,
+                     n_blocks=L, what=f"IB L={L}")  # fmt: skip
     d = rng.uniform(0, 3, (n, 2))
     res = LLP(mdp, part, d, cost).solve("HIGHS")
     assert (res.values - vref).min() >= -tol, "LLP's v is below v*"
+    ind.check_mdp_lp(res, "LLP", P, R, mdp.allowed, 0.85, labels=part.labels, cost=cost)
     z = res.extra["z"]
     q = mdp.rewards + mdp.discount * (
         mdp.probabilities_full() * res.values[part.labels[mdp.successors]]
@@ -75,10 +84,16 @@ def test_llp_can_be_strictly_worse_than_rlp():
     res = LLP(mdp, part, d, cost).solve("HIGHS")
     assert (res.values - vref).min() >= -1e-9, "LLP's v is below v*"
     assert (res.values - vref).max() > 0.1, "expected a strictly worse v with this d"
+    # LLP's bracket is on RLP's v*: its upper side (feasibility) is tight at the point, its
+    # lower side as wide as the point's distance above v* requires
+    P, R = _dense(mdp)
+    ind.check_mdp_lp(res, "LLP", P, R, mdp.allowed, 0.9, labels=part.labels, cost=cost)
+    assert res.error_bound > 0.1 * (1 - 0.9), "a point 0.1 above v* cannot be certified close"
     # the other solvers agree on the LLP optimum value
     for solver in ("CLARABEL", "SCIPY"):
         other = LLP(mdp, part, d, cost).solve(solver)
         assert abs(other.objective - res.objective) <= 1e-6 * max(1.0, abs(res.objective))
+        ind.check_mdp_lp(other, "LLP", P, R, mdp.allowed, 0.9, labels=part.labels, cost=cost)
 
 
 @pytest.mark.parametrize("L", [0, -1, 2.5, True, "2"])

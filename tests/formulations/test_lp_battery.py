@@ -14,6 +14,7 @@ import pytest
 import lpbounds as lb
 from lpbounds.formulations import ALP, ELP, IB, LLP, RLP, SLP
 
+from .. import _independent as ind
 from ..conftest import reference_solve
 from ._reference import rlp_reference, transition_rows
 
@@ -30,6 +31,14 @@ def model() -> tuple[lb.FiniteMDP, lb.Partition, np.ndarray, np.ndarray]:
     mdp = lb.garnet(30, 3, 3, 0.9, seed=21, allowed_fraction=0.8)
     part = lb.random_partition(30, 6, seed=4)
     return mdp, part, reference_solve(mdp), rlp_reference(mdp, part)
+
+
+def _certified(mdp, res, kind, **kw) -> None:
+    """The bracket both ways (tests/_independent): it contains the exact optimum computed
+    there, is as narrow as the point's residual allows and, OPTIMAL, within the accuracy."""
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    status = ind.check_mdp_lp(res, kind, P, mdp.rewards, mdp.allowed, mdp.discount, **kw)
+    assert status == "optimal", status  # solve() raises otherwise
 
 
 def _kkt(form, res, tol: float) -> None:
@@ -56,6 +65,7 @@ class TestLPBattery:
         res = form.solve(solver)
         assert np.abs(res.values - vstar).max() <= _tol(vstar), "ELP optimum != V* (Lemma 1)"
         _kkt(form, res, 1e-6)
+        _certified(mdp, res, "ELP", cost=cost)
         # mu is the discounted state-action frequency from c: sum_u mu(x,u) -
         # lam sum_{x',u'} mu(x',u') P(x | x',u') = c(x)
         p, _, pairs = transition_rows(mdp)
@@ -70,6 +80,7 @@ class TestLPBattery:
         assert np.abs(res.values - vref).max() <= _tol(vref), "RLP optimum != loop reference"
         assert np.abs(form.fixed_point() - vref).max() <= 1e-9 * max(1, np.abs(vref).max())
         _kkt(form, res, 1e-6)
+        _certified(mdp, res, "RLP", labels=part.labels)
         # the pair duals mu-bar satisfy the partition-level flow balance with c-bar
         p, _, pairs = transition_rows(mdp)
         m = res.mu[pairs[:, 0], pairs[:, 1]]
@@ -89,6 +100,12 @@ class TestLPBattery:
         red = lb.solve_exact(slp.reduced_mdp()).values
         assert np.abs(red - vref).max() <= _tol(vref)
         _kkt(slp, sres, 1e-6)
+        _certified(mdp, res, "RLP", labels=part.labels)
+        # SLP(mu-bar) is the exact LP of its reduced MDP (Lemma 2): bracket on its V* = v*
+        red_mdp = slp.reduced_mdp()
+        red = ind.dense_transitions(red_mdp.successors, red_mdp.probabilities_full())
+        st = ind.check_mdp_lp(sres, "ELP", red, red_mdp.rewards, red_mdp.allowed, mdp.discount)
+        assert st == "optimal"
         # SLP's duals mapped back through h are again an optimal RLP dual: same objective
         rlp_obj = part.sizes @ vref
         dual_obj = (mdp.rewards * sres.mu)[mdp.allowed].sum()
@@ -104,6 +121,8 @@ class TestLPBattery:
         assert (blocks - vref).min() >= -_tol(vref), "an IB block beats v* (Theorem 2)"
         assert np.abs(form.fixed_point() - vref).max() <= 1e-9 * max(1, np.abs(vref).max())
         _kkt(form, res, 1e-6)
+        cost = np.linspace(0.0, 1.0, mdp.n_states)  # the cost of the form above
+        _certified(mdp, res, "IB", labels=part.labels, cost=cost, n_blocks=L)
 
     def test_llp_never_beats_rlp(self, solver, model):
         mdp, part, _, vref = model
@@ -115,6 +134,8 @@ class TestLPBattery:
         assert z.min() >= -_tol(vref), "surplus variables must be >= 0"
         res0 = LLP(mdp, part, np.zeros_like(d)).solve(solver)
         assert np.abs(res0.values - vref).max() <= _tol(vref), "LLP with d = 0 must be v*"
+        _certified(mdp, res, "LLP", labels=part.labels)
+        _certified(mdp, res0, "LLP", labels=part.labels)
 
     def test_alp_partition_basis_is_rlp_and_soft_basis_matches_linprog(self, solver, model):
         from scipy.optimize import linprog
@@ -122,6 +143,7 @@ class TestLPBattery:
         mdp, part, vstar, vref = model
         res = ALP(mdp, part.basis.toarray()).solve(solver)
         assert np.abs(res.values - vref).max() <= _tol(vref), "ALP with 0/1 basis != RLP"
+        _certified(mdp, res, "ALP")
         phi = lb.formulations.soft_aggregation_basis(mdp.n_states, 4, seed=2)
         cost = np.random.default_rng(5).uniform(0.1, 1, mdp.n_states)
         form = ALP(mdp, phi, cost)
@@ -133,3 +155,4 @@ class TestLPBattery:
         assert abs(res.objective - ref.fun) <= 1e-6 * max(1, abs(ref.fun)), "ALP objective"
         assert (res.state_values - vstar).min() >= -_tol(vstar), "Phi r must be >= V*"
         _kkt(form, res, 1e-6)
+        _certified(mdp, res, "ALP", cost=cost)

@@ -25,12 +25,39 @@ from lpbounds.patrol import PatrolParams
 from lpbounds.patrol.bounds import LBLP, UBLP
 from lpbounds.status import Status
 
+from .. import _independent as ind
 from ..conftest import reference_solve
 from ._reference import _q_partition, rlp_reference
 
 
 def _model(n=30, m=5, seed=1):
     return lb.garnet(n, 3, 3, 0.9, seed=seed), lb.random_partition(n, m, seed=seed)
+
+
+def _check(mdp, res, kind, **kw):
+    """The certified bracket both ways against references computed in tests/_independent."""
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    return ind.check_mdp_lp(res, kind, P, mdp.rewards, mdp.allowed, mdp.discount, **kw)
+
+
+def _check_modified(mdp, res, labels=None):
+    """A modified solve's bracket is the certificate of its point on the ORIGINAL rows: it
+    contains the original optimum and is as narrow as the point's residual allows; only the
+    upper side (feasibility) is judged, and error_bound is inf by design."""
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    R, allowed, lam = mdp.rewards, mdp.allowed, mdp.discount
+    if labels is None:  # ELP: per state
+        opt = ind.policy_iteration(P, R, allowed, lam)
+        t = ind.bellman(P, R, allowed, lam, res.values)
+    else:
+        opt = ind.rlp_optimum(P, R, allowed, lam, labels)
+        t = ind.rlp_operator(P, R, allowed, lam, labels, res.values)
+    assert res.modified and res.error_bound == np.inf
+    return ind.assert_bracket(
+        res, point=res.values, t_point=t, discount=lam,
+        reward_absmax=float(np.abs(R).max()), n_terms=mdp.n_outcomes, optimum=opt.values,
+        optimum_err=opt.error, judged="upper", check_error_bound=False, what="modified",
+    )  # fmt: skip
 
 
 # ------------------------------------------------------------------ item 1: names
@@ -105,6 +132,7 @@ def test_rlp_bellman_group_is_eq_9_and_duals_come_per_group():
     # below v* by t: the violation is t (1 - lam) at least (every row has sum p = 1)
     assert _group_violation(rlp.constraints["bellman"]) >= 0.1 * (1 - 0.9) - 1e-9
     res = rlp.solve("HIGHS")
+    assert _check(mdp, res, "RLP", labels=part.labels) == "optimal"
     assert list(res.group_duals) == ["bellman"]
     np.testing.assert_array_equal(res.group_duals["bellman"], res.duals)
     # flow balance summed over partitions: sum y (1 - lam) = sum c-bar (stochastic rows)
@@ -117,6 +145,7 @@ def test_ib_dual_mass_per_group_is_sum_cbar_over_one_minus_lambda():
     (``Y_j`` the dual mass of bellman_j), whose only solution is ``Y_j = sum c-bar / (1-lam)``."""
     mdp, part = _model(30, 5, seed=2)
     res = IB(mdp, part, 4).solve("HIGHS")
+    assert _check(mdp, res, "IB", labels=part.labels, n_blocks=4) == "optimal"
     assert list(res.group_duals) == [f"bellman_{j}" for j in range(1, 5)]
     np.testing.assert_array_equal(np.concatenate(list(res.group_duals.values())), res.duals)
     for name, y in res.group_duals.items():
@@ -127,6 +156,7 @@ def test_llp_groups_and_their_duals():
     mdp, part = _model(20, 4, seed=5)
     d = np.random.default_rng(1).random((20, 3))
     res = LLP(mdp, part, d).solve("HIGHS")
+    assert _check(mdp, res, "LLP", labels=part.labels) == "optimal"
     k = int(mdp.allowed.sum())
     assert {g: y.size for g, y in res.group_duals.items()} == {
         "surplus_lower": k,
@@ -172,6 +202,7 @@ def test_rlp_with_v_i_below_v_j_keeps_theorem_1(solver):
         rlp = RLP(mdp, part, cost)
         res = rlp.solve(solver, extra_constraints=[rlp.v[i] <= rlp.v[j]])
         assert res.status is Status.OPTIMAL and res.modified
+        assert _check_modified(mdp, res, part.labels) == "optimal"
         # the modified optimum is the least element of the smaller set, for every cost
         assert np.abs(res.values - ref).max() <= 1e-6 * scale
         assert res.extra_residuals[0] <= res.residual_tol
@@ -186,7 +217,9 @@ def test_rlp_with_v_i_below_v_j_keeps_theorem_1(solver):
         assert res.certificate.residual_down > res.residual_tol
         # the formulation is unchanged: a plain solve gives v* again
         assert len(rlp.problem.constraints) == 1
-        assert np.abs(rlp.solve(solver).values - vstar).max() <= 1e-6 * scale
+        plain = rlp.solve(solver)
+        assert np.abs(plain.values - vstar).max() <= 1e-6 * scale
+        assert _check(mdp, plain, "RLP", labels=part.labels, cost=cost) == "optimal"
 
 
 def test_non_binding_constraint_leaves_v_star_and_has_zero_dual():
@@ -196,6 +229,7 @@ def test_non_binding_constraint_leaves_v_star_and_has_zero_dual():
     rlp = RLP(mdp, part)
     res = rlp.solve("HIGHS", extra_constraints=[rlp.v[j] <= rlp.v[i]])
     assert res.ok and np.abs(res.values - vstar).max() <= 1e-8 * np.abs(vstar).max()
+    assert _check_modified(mdp, res, part.labels) == "optimal"
     assert abs(res.extra_duals[0][0]) <= 1e-9
     assert res.kkt_gap <= res.accuracy * 10 * 40
 
@@ -209,6 +243,7 @@ def test_equality_and_elp_modifications_against_the_reference():
     rlp = RLP(mdp, part)
     res = rlp.solve("HIGHS", extra_constraints=[rlp.v[i] == rlp.v[j] + 0.5])
     assert res.ok and np.abs(res.values - ref).max() <= 1e-7 * np.abs(ref).max()
+    assert _check_modified(mdp, res, part.labels) == "optimal"
     assert res.extra_duals[0].shape == (1,)
     # ELP with V(0) >= V*(0) + 1: the reference on singleton partitions
     vtrue = reference_solve(mdp)
@@ -219,6 +254,7 @@ def test_equality_and_elp_modifications_against_the_reference():
     ref = least_point_with_links(mdp, ident, 30, [], np.where(ident == 0, floor, vtrue))
     assert res.ok and np.abs(res.values - ref).max() <= 1e-7 * np.abs(ref).max()
     assert (res.upper_values >= vtrue - 1e-9).all()  # still an upper bound on V*
+    assert _check_modified(mdp, res) == "optimal"
 
 
 def test_ib_modification_and_a_vector_constraint():
@@ -231,6 +267,17 @@ def test_ib_modification_and_a_vector_constraint():
     blocks = res.extra["blocks"]
     assert (blocks[1] >= blocks[0] + 0.25 - 1e-7).all()
     assert (blocks >= vstar - 1e-7).all()
+    # block v_1's bracket is the certificate of all blocks on the original cyclic rows
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    ref = ind.rlp_optimum(P, mdp.rewards, mdp.allowed, 0.9, part.labels)
+    status = ind.assert_bracket(
+        res, point=res.x, t_point=ind.ib_operator(P, mdp.rewards, mdp.allowed, 0.9,
+                                                  part.labels, res.x, 2),
+        discount=0.9, reward_absmax=float(np.abs(mdp.rewards).max()), n_terms=3,
+        optimum=np.tile(ref.values, 2), optimum_err=ref.error, judged="upper",
+        check_error_bound=False, what="IB modified",
+    )  # fmt: skip
+    assert status == "optimal" and res.error_bound == np.inf
 
 
 def test_infeasible_modification_has_no_point():
@@ -251,6 +298,7 @@ def test_an_inaccurate_modified_point_is_reported_as_such():
         "SCS", accuracy=1e-300, extra_constraints=[rlp.v[i] <= rlp.v[j]], raise_on_failure=False
     )
     assert res.status is Status.INACCURATE and res.modified
+    assert _check_modified(mdp, res, part.labels) == "inaccurate"  # still a valid bracket
     with pytest.raises(SolverError, match="kkt_gap"):
         rlp.solve("SCS", accuracy=1e-300, extra_constraints=[rlp.v[i] <= rlp.v[j]])
 

@@ -3,7 +3,8 @@
 The reference is a deliberately simple loop written here from the paper's eq. 25: value
 iteration on ``w(i) = max_u min_{x in S_i} [R_u(x) + lambda sum_l p_l w(f-bar(x,u,Y_l))]``
 over the *states* of each partition (no merging of rows, no package kernels). ``V*`` comes
-from exact DP (policy iteration of :func:`lpbounds.dp.solve_exact`).
+from dense policy iteration in ``tests/_independent`` (numpy only), and every result's
+certified bracket is checked both ways there (contains ``w*``, no wider than its residual).
 """
 
 from __future__ import annotations
@@ -16,7 +17,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lpbounds.dp import solve_exact
 from lpbounds.errors import ConvergenceError, SolverNotInstalledError, ValidationError
 from lpbounds.formulations import NLP
 from lpbounds.formulations.nlp_cuts import (
@@ -29,6 +29,8 @@ from lpbounds.formulations.nlp_cuts import (
 from lpbounds.generators import garnet, random_partition
 from lpbounds.partition import Partition
 from lpbounds.status import Status
+
+from .. import _independent as ind
 
 #: methods that must agree with the reference to this (relative to max(1, max|w*|))
 AGREE_RTOL = 1e-9
@@ -72,6 +74,19 @@ def reference_w(mdp, partition, tol_rel: float = 1e-14) -> np.ndarray:
     raise AssertionError("reference value iteration did not converge")
 
 
+def check_result(mdp, part, r, ref=None) -> str:
+    """The result's certified bracket on w* both ways (tests/_independent.check_nlp): it
+    contains w* (``ref``, with the loops' own error, or computed there), is no wider than
+    the point's residual allows and, OPTIMAL, within ``gap_rtol`` of the scale."""
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    opt = None
+    if ref is not None:  # reference_w stops at 1e-14 of the scale: its error is below 1e-13
+        opt = ind.Reference(ref, 1e-13 * np.abs(mdp.rewards).max() / (1 - mdp.discount))
+    return ind.check_nlp(
+        r, P, mdp.rewards, mdp.allowed, mdp.discount, part.labels, optimum=opt, what=r.method
+    )
+
+
 def instance(n: int, a: int, l_out: int, m: int, seed: int):
     mdp = garnet(n, a, l_out, 0.9, seed=seed)
     return mdp, random_partition(n, m, seed=seed)
@@ -99,8 +114,10 @@ def test_exact_methods_agree_with_reference_and_bound_v_star(spec):
             f"{method}: bracket [{r.lower_bound}, {r.upper_bound}] misses c'w* = {opt}"
         )
         np.testing.assert_allclose(r.state_values, ref[part.labels], rtol=0, atol=tol)
+        assert check_result(mdp, part, r, ref) == "optimal", method
     # w*(i) <= min over S_i of V* (exact DP), and the certified lower_values too
-    v_star = solve_exact(mdp, method="pi").values
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    v_star = ind.policy_iteration(P, mdp.rewards, mdp.allowed, mdp.discount).values
     vmin = part.aggregate(v_star, "min")
     slack = 1e-9 * max(1.0, np.abs(v_star).max())
     w = results["strategy-iteration"]
@@ -114,12 +131,16 @@ def test_singleton_partition_gives_v_star():
     part = Partition(np.arange(12))
     nlp = NLP(mdp, part)
     assert (nlp.disj_size == 1).all()
-    v_star = solve_exact(mdp, method="pi").values
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    ref = ind.policy_iteration(P, mdp.rewards, mdp.allowed, mdp.discount)
+    v_star = ref.values
     tol = AGREE_RTOL * max(1.0, np.abs(v_star).max())
     for method in ("fixed-point", "strategy-iteration", "milp", "cutting-planes"):
         r = nlp.solve(method)
         assert np.abs(r.values - v_star).max() <= tol, f"{method}: w* != V* on singletons"
         assert r.converged, r.summary()
+        assert ind.check_nlp(r, P, mdp.rewards, mdp.allowed, 0.9, part.labels,
+                             optimum=ref, what=method) == "optimal"  # fmt: skip
 
 
 def test_disallowed_actions():
@@ -130,10 +151,13 @@ def test_disallowed_actions():
     nlp = NLP(mdp, part)
     tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
     for method in ("fixed-point", "strategy-iteration", "milp"):
-        err = np.abs(nlp.solve(method).values - ref).max()
+        r = nlp.solve(method)
+        err = np.abs(r.values - ref).max()
         assert err <= tol, f"{method}: {err:.2e}"
+        assert check_result(mdp, part, r, ref) == "optimal", method
     r = nlp.solve("cutting-planes", cuts="lift-and-project", max_iter=30)
     _check_bracket_every_round(nlp, r, ref)
+    check_result(mdp, part, r, ref)  # whatever status 30 rounds reach
 
 
 def test_strategy_iteration_upper_bounds_decrease():
@@ -157,6 +181,7 @@ def test_cost_independence():
         w = nlp.solve("milp").values  # the MILP's minimiser depends on c only if w* does
         assert np.abs(w - ref).max() <= tol, f"MILP minimiser changed with cost {c}"
         cp_res = nlp.solve("cutting-planes", max_iter=40)
+        check_result(mdp, part, cp_res, ref)
         opt = float(c @ ref)
         slack = BRACKET_RTOL * max(1.0, abs(opt))
         assert cp_res.lower_bound <= opt + slack <= cp_res.upper_bound + 2 * slack
@@ -197,6 +222,8 @@ def test_cutting_planes_bracket_valid_every_round_and_closes(spec):
     assert r.gap <= r.gap_rtol * max(1.0, abs(r.upper_bound)), r.summary()
     assert r.cuts == sum(e.cuts_added for e in r.log)
     assert r.iterations == len(r.log)
+    # converged by its own bracket on c'w*; the certificate of the returned incumbent
+    check_result(mdp, part, r, ref)
 
 
 @pytest.mark.parametrize("spec", [(15, 2, 2, 4, 0), (20, 3, 3, 5, 5)], ids=["n15-s0", "n20-s5"])
@@ -224,6 +251,7 @@ def test_cutting_planes_stop_at_round_limit_is_reported():
     assert hi - lo > 1.0 and r.gap > 1.0, "the bracket is still open after 3 rounds"
     _check_bracket_every_round(nlp, r, ref)
     _check_certified(nlp, r, ref)
+    assert check_result(mdp, part, r, ref) == "iteration_limit"
     with pytest.raises(ConvergenceError, match="NOT converged"):
         nlp.solve(
             "cutting-planes",
@@ -255,9 +283,11 @@ def test_iteration_limit_keeps_a_certified_bracket(method):
     assert r.stop_reason == "max_iter"
     assert r.gap > 1e-3, "one strategy / three sweeps do not close the bracket here"
     _check_certified(nlp, r, ref)
+    assert check_result(mdp, part, r, ref) == "iteration_limit"  # wide, as its residual says
     full = nlp.solve(method)
     assert full.status is Status.OPTIMAL and full.converged, full.summary()
     _check_certified(nlp, full, ref)
+    assert check_result(mdp, part, full, ref) == "optimal"
     # OPTIMAL means the certified bracket closed to gap_rtol in the problem's units
     assert full.relative_gap <= full.gap_rtol, full.relative_gap
 
@@ -281,6 +311,8 @@ def test_milp_honours_time_limit(solver):
     assert r.lower_bound <= exact.upper_bound and exact.lower_bound <= r.upper_bound
     assert (r.lower_values <= exact.upper_values).all()
     assert (exact.lower_values <= r.upper_values).all()
+    assert check_result(mdp, part, exact) == "optimal"
+    assert check_result(mdp, part, r) in ("time_limit", "optimal")
 
 
 def test_each_method_accepts_only_its_keywords():
@@ -351,6 +383,7 @@ def test_progress_bar_runs():
     mdp, part = instance(8, 2, 2, 3, 0)
     r = NLP(mdp, part).solve("strategy-iteration", progress=True)
     assert r.converged
+    assert check_result(mdp, part, r) == "optimal"
 
 
 # ---------------------------------------------------------------------- bad input
@@ -404,7 +437,8 @@ def test_property_game_fixed_point_equals_milp(n, a, l_out, m_frac, seed, discou
     nlp = NLP(mdp, part)
     ref = reference_w(mdp, part)
     tol = AGREE_RTOL * max(1.0, np.abs(ref).max())
-    fp = nlp.solve("fixed-point").values
-    milp = nlp.solve("milp").values
+    fp_res, milp_res = nlp.solve("fixed-point"), nlp.solve("milp")
+    fp, milp = fp_res.values, milp_res.values
+    assert check_result(mdp, part, fp_res, ref) == check_result(mdp, part, milp_res, ref)
     assert np.abs(fp - ref).max() <= tol, f"fixed point vs reference {np.abs(fp - ref).max():.2e}"
     assert np.abs(milp - ref).max() <= tol, f"milp vs reference {np.abs(milp - ref).max():.2e}"

@@ -24,6 +24,8 @@ from lpbounds.generators import garnet, random_partition
 from lpbounds.partition import Partition
 from lpbounds.status import Status
 
+from .. import _independent as ind
+
 #: slack of the checks at w*, relative to the problem's scale max|R| / (1 - lambda)
 VALID_RTOL = 1e-9
 
@@ -83,6 +85,16 @@ def check_rounds(nlp: NLP, record, ref: np.ndarray) -> None:
         # the same master as an LP: w* satisfies it too
         lp = rnd.lp
         assert (lp.A @ ref - lp.row_lo).min() >= -tol, f"round {k}: an LP row cuts w* off"
+
+
+def check_result(nlp: NLP, r, ref: np.ndarray | None = None) -> str:
+    """The result's certified bracket on w* both ways (tests/_independent.check_nlp)."""
+    mdp, part = nlp.mdp, nlp.partition
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    opt = None if ref is None else ind.Reference(ref, 1e-13 * nlp.scale)  # the loops' stop
+    return ind.check_nlp(
+        r, P, mdp.rewards, mdp.allowed, mdp.discount, part.labels, optimum=opt, what=r.method
+    )
 
 
 def garnet_case(n: int, m: int, seed: int):
@@ -147,6 +159,7 @@ def test_property_bracket_contains_w_star_every_round(masked, **kw):
     assert r.lower_bound <= si.upper_bound and si.lower_bound <= r.upper_bound
     assert (r.lower_values <= ref + 1e-9 * nlp.scale).all()
     assert (r.upper_values >= ref - 1e-9 * nlp.scale).all()
+    assert check_result(nlp, r, ref) == check_result(nlp, si, ref) == "optimal"
 
 
 @pytest.mark.parametrize("backend", ["highspy", "cvxpy"])
@@ -174,6 +187,7 @@ def test_row_system_master_matches_cold_cvxpy_master():
         assert sol.status == "optimal"
         assert np.abs(sol.x - rnd.point).max() <= tol, np.abs(sol.x - rnd.point).max()
     res = nlp.solve("cutting-planes")
+    assert check_result(nlp, res) == "optimal"
     master = nlp.master
     assert isinstance(master, MonotoneMaster)
     assert set(master.constraints) >= {"box_lower", "box_upper"}
@@ -198,6 +212,8 @@ def test_solve_default_is_monotone_and_closes_on_a_garnet():
     assert hi - lo <= 1e-9 * nlp.cost.sum() * nlp.scale
     assert lo <= si.upper_bound and si.lower_bound <= hi
     assert np.abs(r.values - si.values).max() <= 1e-9 * nlp.scale
+    assert check_result(nlp, r) == check_result(nlp, si) == "optimal"
+    assert r.upper_bound - r.lower_bound <= 1e-9 * nlp.cost.sum() * nlp.scale * (1 + 1e-6)
 
 
 def test_round_limit_is_reported():
@@ -206,6 +222,8 @@ def test_round_limit_is_reported():
     assert r.iterations == 2 and r.stop_reason == "max_rounds"
     lo, hi = r.extra["method_bracket"]
     assert hi - lo > 1.0
+    # the returned point's certificate: valid, as wide as its residual, honestly not OPTIMAL
+    assert check_result(nlp, r) == "iteration_limit"
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -3,9 +3,10 @@
 A disjunction ``(i, u)`` is implied by the Bellman inequalities of ``V*`` only when ``u``
 is allowed at every state of ``S_i`` (a state forbidding ``u`` contributes the term
 ``-inf`` to the min over ``S_i``), so every method must drop the other ``(i, u)``. The
-references here are independent of the package's NLP code: hand-derived numbers, and
-``V*`` of the full MDP from :func:`lpbounds.solve_exact` (policy iteration) with its own
-error bound.
+references here are independent of the package's NLP code: hand-derived numbers, ``V*``
+of the full MDP by dense policy iteration and ``w*`` by strategy iteration, both in
+``tests/_independent`` (numpy only), each with its own error bound; every result's bracket
+is checked both ways there (contains ``w*``, no wider than its point's residual allows).
 """
 
 from __future__ import annotations
@@ -15,11 +16,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lpbounds import BellmanRows, FiniteMDP, solve_exact
+from lpbounds import BellmanRows, FiniteMDP
 from lpbounds.errors import ValidationError
 from lpbounds.formulations import NLP
 from lpbounds.partition import Partition
 from lpbounds.status import Status
+
+from .. import _independent as ind
 
 METHODS = ("fixed-point", "strategy-iteration", "milp", "cutting-planes")
 #: keywords that keep every method short on the property test's small instances
@@ -128,10 +131,12 @@ def check_case(mdp, part, cost):
             NLP(mdp, part, partition_cost=cost)
         return
     nlp = NLP(mdp, part, partition_cost=cost)
-    exact = solve_exact(mdp, method="pi")
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    exact = ind.policy_iteration(P, mdp.rewards, mdp.allowed, mdp.discount)
+    w_star = ind.nlp_optimum(P, mdp.rewards, mdp.allowed, mdp.discount, part.labels)
     # V* in [V - e, V + e]: min over S_i of V*'s lower end, and of its upper end
-    vstar_lo = part.aggregate(exact.values - exact.error_bound, "min")
-    vstar_hi = part.aggregate(exact.values + exact.error_bound, "min")
+    vstar_lo = part.aggregate(exact.values - exact.error, "min")
+    vstar_hi = part.aggregate(exact.values + exact.error, "min")
     results = {}
     for method in METHODS:
         if method == "milp" and mdp.n_states > 8:
@@ -152,6 +157,9 @@ def check_case(mdp, part, cost):
         assert (vstar_lo <= vstar_hi).all()
         lo, hi = r.lower_bound, r.upper_bound
         assert lo <= hi and np.isfinite(lo) and np.isfinite(hi)
+        # the bracket on w* both ways: contains it, no wider than the residual allows
+        ind.check_nlp(r, P, mdp.rewards, mdp.allowed, mdp.discount, part.labels,
+                      optimum=w_star, what=method)  # fmt: skip
         results[method] = r
     # every method's bracket contains w*, so any two brackets intersect
     for a_name, ra in results.items():

@@ -17,7 +17,7 @@ from lpbounds.formulations import NLP, NLPMILP
 from lpbounds.formulations.nlp_cuts import NLPMaster
 from lpbounds.partition import Partition
 
-from .test_nlp import reference_w
+from .test_nlp import check_result, reference_w
 from .test_nlp_masks import two_state_mdp
 
 #: instances small enough for HiGHS' branch and bound at its default settings
@@ -67,6 +67,7 @@ def test_problem_solve_with_highs_gives_c_w_star(spec, masked):
     value = nlp.problem.solve(solver="HIGHS")
     assert nlp.problem.status == "optimal"
     si = NLP(mdp, part).solve("strategy-iteration")
+    assert check_result(mdp, part, si, ref) == "optimal"  # its bracket, both ways
     # the solver's MILP tolerances (feasibility 1e-7 on O(1) rows): 1e-6 of the scale
     tol = 1e-6 * nlp.scale * float(nlp.cost.sum())
     assert si.lower_bound - tol <= value <= si.upper_bound + tol, (value, si.summary())
@@ -101,6 +102,10 @@ def test_milp_box_is_certified_and_contains_w_star():
     milp = nlp.milp
     assert isinstance(milp, NLPMILP) and nlp.milp is milp  # built once
     assert (milp.lo <= ref).all() and (ref <= milp.hi).all()
+    # the box is certified, yet not vacuous: finite, within the value range +-max|R|/(1-lam)
+    # (its ends are certificates at the constant -max|R|/(1-lam) and at a strategy's value)
+    assert np.isfinite(milp.lo).all() and np.isfinite(milp.hi).all()
+    assert (milp.hi - milp.lo).max() <= 2 * np.abs(mdp.rewards).max() / (1 - 0.9) * (1 + 1e-9)
     assert (milp.big_m >= 0).all()
     groups = list(milp.constraints)
     assert groups[-2:] == ["box_lower", "box_upper"]
@@ -119,6 +124,7 @@ def test_master_is_updated_round_by_round(backend):
     tol = 1e-7 * nlp.scale * float(nlp.cost.sum())
     assert first.solve("HIGHS").objective <= opt + tol  # a relaxation: a lower bound
     res = nlp.solve("cutting-planes", cuts="lift-and-project", backend=backend, max_iter=15)
+    check_result(mdp, part, res, ref)  # the incumbent's certificate, whatever its status
     last = nlp.master
     assert last is not first and last.n_cuts == res.cuts
     if res.cuts:

@@ -11,6 +11,7 @@ import lpbounds as lb
 from lpbounds.errors import ValidationError
 from lpbounds.formulations import ELP, RLP, SLP
 
+from .. import _independent as ind
 from ..conftest import reference_solve
 from ._reference import hard_aggregation_reference, rlp_reference
 
@@ -37,6 +38,21 @@ def _reduced_by_loops(mdp: lb.FiniteMDP, part: lb.Partition, mu: np.ndarray):
     return r, pt, used
 
 
+def _check_slp(mdp, part, mu, form, res):
+    """SLP(mu)'s bracket against the reduced MDP of the loops above (its exact LP): contains
+    the reduced MDP's V*, as narrow as the point's residual allows, OPTIMAL within accuracy."""
+    r, pt, used = _reduced_by_loops(mdp, part, mu)
+    P = np.transpose(pt, (1, 0, 2))  # (A, M, M)
+    return ind.check_mdp_lp(res, "ELP", P, r, used, mdp.discount, cost=form.c, what="SLP")
+
+
+def _check_rlp(mdp, part, res, cost=None):
+    P = ind.dense_transitions(mdp.successors, mdp.probabilities_full())
+    return ind.check_mdp_lp(
+        res, "RLP", P, mdp.rewards, mdp.allowed, mdp.discount, labels=part.labels, cost=cost
+    )
+
+
 def test_reduced_mdp_matches_step_2_by_loops():
     mdp = lb.garnet(25, 3, 3, 0.85, seed=8, allowed_fraction=0.7)
     part = lb.random_partition(25, 5, seed=2)
@@ -53,7 +69,9 @@ def test_reduced_mdp_matches_step_2_by_loops():
         np.add.at(dense[i, u], red.successors[i, u], p[i, u])
     assert np.allclose(dense[used], pt[used], atol=1e-12), "P-tilde_u(i, j)"
     # SLP's LP is the exact LP of the reduced MDP: same optimum for any cost
-    assert np.allclose(slp.solve().values, ELP(red).solve().values, atol=1e-8)
+    res = slp.solve()
+    assert np.allclose(res.values, ELP(red).solve().values, atol=1e-8)
+    assert _check_slp(mdp, part, mu, slp, res) == "optimal"
     assert np.allclose(slp.fixed_point(), reference_solve(red), atol=1e-8)
 
 
@@ -81,7 +99,9 @@ def test_hard_aggregation_is_not_a_bound():
     slp = SLP(mdp, part, "uniform")
     w = slp.fixed_point()
     assert np.allclose(w, hard_aggregation_reference(mdp, part), atol=1e-8)
-    assert np.allclose(slp.solve().values, w, atol=1e-7)
+    res = slp.solve()
+    assert np.allclose(res.values, w, atol=1e-7)
+    assert _check_slp(mdp, part, slp.mu, slp, res) == "optimal"
     gap = (part.lift(w) - vstar).min()
     assert gap < -0.1, f"expected Phi w < V* somewhere (min gap {gap:.3g})"
     # ... while RLP is a bound, and SLP(mu) <= RLP for any mu (a relaxation)
@@ -97,6 +117,7 @@ def test_zero_cost_unreachable_partition_gets_no_dual_weight():
     part = lb.Partition([0, 1, 2])
     res = RLP(mdp, part, cost=[1.0, 1.0, 0.0]).solve("HIGHS")
     assert res.mu[2, 0] == 0.0
+    assert _check_rlp(mdp, part, res, cost=[1.0, 1.0, 0.0]) == "optimal"
     with pytest.raises(ValidationError, match="partition 2"):
         SLP.from_rlp(res)
     # with a positive cost every partition gets weight and Lemma 2 holds
@@ -118,10 +139,14 @@ def test_lemma_2_on_random_mdps(n, n_act, branching, seed, data):
     part = lb.random_partition(n, m, seed=seed + 1)
     cost = np.random.default_rng(seed).uniform(0.1, 1.0, n)
     res = RLP(mdp, part, cost).solve("HIGHS")
+    assert _check_rlp(mdp, part, res, cost) == "optimal"
     vref = rlp_reference(mdp, part)
     slp = SLP.from_rlp(res)
     tol = 1e-6 * max(1.0, np.abs(vref).max())
     assert np.abs(slp.fixed_point() - vref).max() <= tol, "reduced MDP value != v*"
+    sres = slp.solve("HIGHS")  # Lemma 2 as an LP: SLP(mu-bar)'s certified bracket holds v*
+    assert _check_slp(mdp, part, slp.mu, slp, sres) == "optimal"
+    assert (sres.lower_values <= vref + tol).all() and (vref - tol <= sres.upper_values).all()
     # any mu >= 0 gives a relaxation: its value is <= v*
     mu = np.random.default_rng(seed + 2).uniform(0.0, 1.0, (n, n_act)) * mdp.allowed
     assert (SLP(mdp, part, mu).fixed_point() - vref).max() <= tol

@@ -198,6 +198,26 @@ def test_certified_sandwich_margins_are_promises(run, dense):
     assert "the sandwich is proved" in (run.out / "report.md").read_text()
 
 
+def test_section_6_statements_on_the_small_instance(run, dense):
+    """What Section 6 says of its instance, on this one (Table 1's numbers themselves are for
+    D = 5 and are checked at the paper's size in test_paper_figures.py): the lower bound is
+    the tighter one on average (Figure 5), and pi_s performs as well as pi* on the same
+    alert sequences (Table 1: the two rows agree to the printed digit, 0.05). V* here is
+    the dense value iteration of this file, not the pipeline's."""
+    z, s = run.arrays, run.summary
+    lab = z["partition_of_state"].astype(np.int64)
+    v = _vi(lambda v: _q(dense, v).max(axis=1), z["vstar"].size, dense[3])
+    below, above = v - z["lower"][lab], z["upper"][lab] - v
+    assert below.min() >= -VALUE_ATOL and above.min() >= -VALUE_ATOL
+    assert below.mean() < above.mean(), (below.mean(), above.mean())
+    assert s["sandwich"]["mean_vstar_minus_vlow"] == pytest.approx(below.mean(), abs=VALUE_ATOL)
+    assert s["sandwich"]["mean_vup_minus_vstar"] == pytest.approx(above.mean(), abs=VALUE_ATOL)
+    mc = s["monte_carlo"]
+    for key in ("mean_loiters", "mean_delay_plus_one"):
+        assert abs(mc["pi_star"][key] - mc["pi_s"][key]) <= 0.05, key
+    assert abs(mc["pi_star"]["worst_delay_plus_one"] - mc["pi_s"]["worst_delay_plus_one"]) <= 3
+
+
 def test_claim_counts_by_loops(run, model):
     """Claim 2 on every pair x1 = x2 + e_j, counted with a plain loop over states."""
     z, s = run.arrays, run.summary

@@ -165,10 +165,12 @@ def test_spec_step_matches_loop_reference_on_every_pair(spec):
 
 
 def test_spec_step_matches_patrol_model_step_on_random_states():
-    model_mod = pytest.importorskip("lpbounds.patrol.model")
-    params_mod = pytest.importorskip("lpbounds.patrol.params")
-    params = params_mod.PatrolParams(N=9, stations=(0, 4, 6), D=3, Gamma=5)
-    model = model_mod.PatrolModel(params)
+    # plain imports: a missing or renamed lpbounds module is a failure, never a skip
+    from lpbounds.patrol.model import PatrolModel
+    from lpbounds.patrol.params import PatrolParams
+
+    params = PatrolParams(N=9, stations=(0, 4, 6), D=3, Gamma=5)
+    model = PatrolModel(params)
     rng = np.random.default_rng(0)
     x = rng.integers(0, model.n_states, size=4000)
     comps = model.state_components()[x]
