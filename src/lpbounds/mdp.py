@@ -23,7 +23,7 @@ import scipy.sparse as sp
 
 from . import interop
 from .errors import ValidationError
-from .stochastic import check_effective_discount, check_rows
+from .stochastic import check_rows
 from .validation import (
     as_array,
     as_float_array,
@@ -316,8 +316,7 @@ class FiniteMDP:
         if p.shape == (n_out,):
             if not np.all(np.isfinite(p)):
                 raise ValidationError(f"probabilities must be finite; got {p}")
-            check_rows("probabilities", p)
-            check_effective_discount("probabilities", p, discount)
+            check_rows("probabilities", p, discount)
             return np.clip(p, 0.0, None)
         if p.shape != shape:
             raise ValidationError(
@@ -327,8 +326,7 @@ class FiniteMDP:
         if nonfinite.any():
             x, u, ll = first_index(nonfinite)
             raise ValidationError(f"probabilities[{x}, {u}, {ll}] = {p[x, u, ll]} is not finite")
-        check_rows("probabilities", p, where=allow)
-        check_effective_discount("probabilities", p, discount, where=allow)
+        check_rows("probabilities", p, discount, where=allow)
         p = np.clip(p, 0.0, None)
         p[~allow] = 0.0
         p[~allow, 0] = 1.0

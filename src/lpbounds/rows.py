@@ -89,7 +89,7 @@ from . import _backend
 from .errors import ValidationError
 from .mdp import FiniteMDP, index_dtype
 from .partition import Partition
-from .stochastic import RowSums, check_effective_discount, check_rows, row_sums
+from .stochastic import RowSums, check_rows, row_sums
 from .validation import (
     as_float_array,
     check_array,
@@ -264,8 +264,7 @@ class BellmanRows:
         check_indices("action", action, np.iinfo(np.int32).max)
         if not np.all(np.isfinite(probs)):
             raise ValidationError("probs must be finite")
-        check_rows("probs", probs)  # the rule FiniteMDP applies (lpbounds.stochastic)
-        check_effective_discount("probs", probs, lam)
+        check_rows("probs", probs, lam)  # the rule FiniteMDP applies (lpbounds.stochastic)
         if (probs < 0).any():
             probs = np.clip(probs, 0.0, None)
         check_value_scale(float(np.abs(reward).max(initial=0.0)), lam, "reward")

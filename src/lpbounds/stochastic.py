@@ -20,7 +20,7 @@ terms (any summation order), so widening the computed extremes by ``(L + 3) eps`
   offset algebra ``T(v + c) = T v + lambda c`` holds up to ``lambda |c| delta``.
 
 A model whose ``kappa`` is not below 1 has no discounted value (the rows are not a
-contraction): :func:`check_effective_discount` refuses it, naming the row.
+contraction): :func:`check_rows` refuses it, naming the row.
 """
 
 from __future__ import annotations
@@ -35,7 +35,6 @@ from .tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
 __all__ = [
     "RowSums",
     "bellman_margin",
-    "check_effective_discount",
     "check_rows",
     "row_sums",
 ]
@@ -130,8 +129,9 @@ def row_sums(probs: np.ndarray) -> RowSums:
     return RowSums(float(sums.min()), float(sums.max()), n_out)
 
 
-def check_rows(name: str, p: np.ndarray, where: np.ndarray | None = None) -> None:
-    """The row-sum rule: entries ``>= -PROBABILITY_NEGATIVE_ATOL``, each row summing to 1.
+def check_rows(name: str, p: np.ndarray, discount: float, where: np.ndarray | None = None) -> None:
+    """The row-sum rule: entries ``>= -PROBABILITY_NEGATIVE_ATOL``, each row summing to 1,
+    and the effective discount ``discount * max row sum`` below 1 (one sum of the rows).
 
     Parameters
     ----------
@@ -139,6 +139,8 @@ def check_rows(name: str, p: np.ndarray, where: np.ndarray | None = None) -> Non
         The argument's name, used in the messages (``probabilities``, ``probs``).
     p : ndarray (..., L)
         Rows along the last axis; must be finite where checked.
+    discount : float
+        ``lambda``, in ``[0, 1)`` (checked by the caller).
     where : ndarray of bool (...), optional
         Only these rows are checked (the allowed pairs); default every row.
 
@@ -146,7 +148,7 @@ def check_rows(name: str, p: np.ndarray, where: np.ndarray | None = None) -> Non
     ------
     ValidationError
         Naming the first negative entry or the first row whose sum is off, with the
-        number of such entries.
+        number of such entries, or the row whose sum makes the effective discount >= 1.
     """
     neg = p < -PROBABILITY_NEGATIVE_ATOL
     if where is not None:
@@ -171,35 +173,28 @@ def check_rows(name: str, p: np.ndarray, where: np.ndarray | None = None) -> Non
             f"{name}[{', '.join(map(str, idx))}, :] sum to {float(sums[idx]):.12g}, not 1 "
             f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(off.sum())} such rows)"
         )
+    _check_effective_discount(name, np.asarray(sums), int(p.shape[-1]), discount, where)
 
 
-def check_effective_discount(
-    name: str, p: np.ndarray, discount: float, where: np.ndarray | None = None
+def _check_effective_discount(
+    name: str, sums: np.ndarray, n_out: int, discount: float, where: np.ndarray | None
 ) -> None:
     """Refuse rows whose effective discount ``lambda * max row sum`` is not below 1.
 
-    Rows summing to ``1 + 9e-10`` pass :func:`check_rows`; with a discount of
+    Rows summing to ``1 + 9e-10`` pass the sum tolerance; with a discount of
     ``1 - 1e-10`` their operator is not a contraction and no discounted value exists.
     The test is the certified one (:meth:`RowSums.modulus` ``< 1``), so every model that
-    passes can be certified.
-
-    Raises
-    ------
-    ValidationError
-        Naming the row with the largest sum and the product.
+    passes can be certified. ``sums`` are :func:`check_rows`' row sums (``where``: the
+    rows that count).
     """
-    if p.ndim == 1:
-        sums = np.asarray(p.sum())
-    else:
-        sums = p.sum(axis=-1)
-        if where is not None:
-            sums = np.where(where, sums, 0.0)
+    if where is not None:
+        sums = np.where(where, sums, 0.0)
     flat = int(np.argmax(sums))
     s_max = float(sums.reshape(-1)[flat])
-    rs = RowSums(s_max, s_max, int(p.shape[-1]))
+    rs = RowSums(s_max, s_max, n_out)
     if rs.modulus(discount) < 1.0:
         return
-    if p.ndim == 1:
+    if sums.ndim == 0:
         row = name
     else:
         idx = np.unravel_index(flat, sums.shape)
