@@ -32,7 +32,7 @@ from _common import machine, run_isolated, today, write_section
 PAPER = """
 import time, json, hashlib
 import numpy as np
-from lpbounds.instances import load_instance
+from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol.params import PatrolParams
 p = params_from_instance(load_instance("patrol-paper"))
@@ -59,7 +59,7 @@ print(json.dumps({{"seconds": t, "iterations": r.iterations, "sweeps": r.sweeps,
 
 STUDY = """
 import sys, time
-from lpbounds.instances import load_instance
+from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol.beyond import study, save_result
 name, out = sys.argv[1], sys.argv[2]

@@ -6,7 +6,7 @@ still 0.043 from V*). The documented route: ``ELP(mdp).solve(backend="highspy",
 warm_start="policy")`` -- exact DP gives the optimal policy, HiGHS' simplex method starts
 from that policy's basis and only has to confirm it. Measured in this process: the time of
 each step, the peak resident set size, the iterations, the certified error of the returned
-point (:func:`lpbounds.certify`), lpbounds' dual residual and gap from the returned duals.
+point (:func:`lpbounds.certification`), lpbounds' dual residual and gap from the returned duals.
 
 Usage: ``python benchmarks/bench_elp_paper.py [--model patrol-paper] [--min-free-gb 10]``.
 Needs about 5 GB; it refuses to start with less than ``--min-free-gb`` available.
@@ -99,7 +99,7 @@ def report(r: dict, load_before: tuple, load_after: tuple, model: str) -> str:
             f"{r['rss_built_mb'] / 1024:.2f} GB.",
             "",
             "What this proves. The point: `lower_values <= V* <= upper_values` entry by entry "
-            "from `lpbounds.certify` (Bellman residual / (1 - lambda), rounding included), "
+            "from `lpbounds.certification` (Bellman residual / (1 - lambda), rounding included), "
             "whatever HiGHS claimed; the certified error above is that bracket's width. The "
             "duals: HiGHS' row duals at the final basis are the optimal policy's discounted "
             "occupation measure, `y >= 0`; lpbounds recomputes `A'y - c` and `c'x - b'y` from "

@@ -35,7 +35,7 @@ SIZES: tuple[tuple[str, str, bool], ...] = (
 
 EXPORT = """
 import json, time
-from lpbounds.export import export_lp
+from lpbounds.studies.export import export_lp
 t0 = time.perf_counter()
 res = export_lp({model!r}, {formulation!r}, {out!r})
 s = res.sidecar
@@ -46,7 +46,7 @@ print(json.dumps({{"seconds": res.seconds, "wall": time.perf_counter() - t0,
 
 SCORE = """
 import json, time
-from lpbounds.export import score_solution
+from lpbounds.studies.export import score_solution
 t0 = time.perf_counter()
 sc = score_solution({out!r}, {solution!r})
 print(json.dumps({{"wall": time.perf_counter() - t0, "certified": sc.certified_error,

@@ -86,8 +86,8 @@ def _aggregate_steps(mdp, part) -> str:
     try:
         import numba
 
-        from lpbounds import _aggregate
-        from lpbounds.mdp import index_dtype
+        from lpbounds._kernels import aggregate as _aggregate
+        from lpbounds.model.mdp import index_dtype
 
         out = []
         clock = time.perf_counter
@@ -114,7 +114,7 @@ def _aggregate_steps(mdp, part) -> str:
         _aggregate.mark_groups(order, oa, key, targets, probs.view(np.int64), new, nch)
         out.append(("group marks", clock() - t0))
         return "; ".join(f"{k} {v:.2f} s" for k, v in out) + " (then the merge kernel)"
-    except Exception as exc:  # the kernels are private to rows.py and may change
+    except Exception as exc:  # the kernels are private to rows/__init__.py and may change
         return f"(not available: {exc})"
 
 
@@ -215,7 +215,7 @@ def bench_cvxpy_vs_highspy(garnet_states: int, garnet_partitions: int, rounds: i
         "changes with it in either direction (last column but one: 42 against 30 on UBLP, "
         "38 against 30 on LBLP, but 27 against 42 on RLP; on garnets it does not change). "
         "Formulation now solves `solver='HIGHS'` through "
-        "`lpbounds.formulations._highs.CvxpyHighs`, a subclass of cvxpy's HiGHS interface "
+        "`lpbounds.formulations.highs.CvxpyHighs`, a subclass of cvxpy's HiGHS interface "
         "that hands HiGHS `A x >= b` as highspy gets it: both backends run HiGHS on the same "
         "LP (same iterations, same point), so the ratio measures only what cvxpy adds, its "
         "compilation (in brackets; cvxpy's COO canonicalisation backend, about 1-2 us per "

@@ -37,7 +37,7 @@ RESULTS = HERE / "results" / "greedy_mc.json"
 RUN = """
 import json, time
 import numpy as np
-from lpbounds.instances import load_instance
+from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol import greedy_mc as g
 from lpbounds.patrol import PatrolParams
@@ -81,7 +81,7 @@ print(json.dumps({{
 CONTROL = """
 import json, time
 import numpy as np
-from lpbounds.instances import load_instance
+from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol import greedy_mc as g
 params = params_from_instance(load_instance("patrol-m8"))

@@ -24,8 +24,8 @@ import os
 import numpy as np
 from _common import machine, today, write_section
 
-from lpbounds.formulations.nlp import NLP
-from lpbounds.generators import garnet, random_partition
+from lpbounds.formulations.nlp.problem import NLP
+from lpbounds.model.generators import garnet, random_partition
 
 #: (states, actions, outcomes, partitions, seed)
 INSTANCES: list[tuple[int, int, int, int, int]] = [

@@ -52,7 +52,9 @@ assert res.values is not None and dp.error_bound <= 1e-7
 """
 
 #: The same without the numpy twins: what a first solve cost before (every kernel compiles).
-GARNET_COMPILED = "from lpbounds import _backend\n_backend.SMALL_READS = 0\n" + GARNET_RLP
+GARNET_COMPILED = (
+    "from lpbounds._kernels import dispatch as _backend\n_backend.SMALL_READS = 0\n" + GARNET_RLP
+)
 
 
 def lpbounds_command() -> list[str]:
@@ -173,7 +175,7 @@ first run in a fresh environment (the target is checked on the slowest of them).
 
 `import lpbounds` loads its public names on first use (PEP 562), so it costs less than
 numpy; the subcommands import numpy, cvxpy, matplotlib and the models inside their `run`.
-Models that read fewer than `lpbounds._backend.SMALL_READS` (200,000) values per Bellman
+Models that read fewer than `lpbounds._kernels.dispatch.SMALL_READS` (200,000) values per Bellman
 sweep run on numpy twins of the numba kernels (same numbers, bit for bit:
 `tests/test_fast_paths.py`), so a first solve compiles nothing; the last row is the same
 script with the compiled kernels forced, which is what every first solve cost before.

@@ -2,7 +2,7 @@
 
 UBLP and LBLP (Theorems 4 and 3), the RLP of the patrol partition (M = 8,900) and the ELP
 (2,048,000 states, about 4.65M rows) of ``models/patrol-paper.toml``, each solved by HiGHS
-IPM, HiGHS PDLP, Clarabel and SCS through :func:`lpbounds.study.run_task` (the same code
+IPM, HiGHS PDLP, Clarabel and SCS through :func:`lpbounds.studies.compare.run_task` (the same code
 as ``lpbounds compare``) under a time limit per solve (default 120 s, passed in each
 solver's own keyword). Each solve runs alone in a fresh process, one after the other, so
 its time and peak memory are its own; a process that outlives ``--hard-timeout`` (Clarabel
@@ -39,7 +39,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 
 CHILD = r"""
 import json, resource, sys, time
-from lpbounds.study import Task, run_task, solver_configs
+from lpbounds.studies.compare import Task, run_task, solver_configs
 spec, form, cfg_name, limit = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
 cfg = next(c for c in solver_configs([cfg_name])[0] if c.label == cfg_name.replace(":default", ""))
 t0 = time.perf_counter()
@@ -140,7 +140,7 @@ def _table(frame) -> str:
 
 
 def _summary(frame, limit: float) -> str:
-    from lpbounds.study_report import solver_summary
+    from lpbounds.studies.report import solver_summary
 
     s = solver_summary(frame, (10.0, 1.0), time_limit=limit)
     head = (
@@ -195,8 +195,8 @@ def _run(args: argparse.Namespace, hard: float) -> tuple[list[dict], dict]:
 
 def _write(frame, meta: dict) -> str:
     """The profiles under docs/img/ and the ``study-scale`` section of docs/benchmarks.md."""
-    from lpbounds.profiles import plot_performance_profile
-    from lpbounds.study_report import profile_tables
+    from lpbounds.studies.profiles import plot_performance_profile
+    from lpbounds.studies.report import profile_tables
 
     time_table, acc_table = profile_tables(frame)
     IMG.mkdir(parents=True, exist_ok=True)
@@ -219,7 +219,7 @@ def _write(frame, meta: dict) -> str:
         f"noisy). Model `{meta['model']}`; time limit {meta['time_limit']:g} s per solve in "
         f"each solver's own keyword; a process is killed after {meta['hard']:.0f} s or "
         f"{meta['max_gb']:g} GB. Each solve alone in a fresh process, through cvxpy "
-        f"(`lpbounds.study.run_task`, as `lpbounds compare`); {len(frame)} solves in "
+        f"(`lpbounds.studies.compare.run_task`, as `lpbounds compare`); {len(frame)} solves in "
         f"{meta['seconds']:.0f} s. Raw table: `benchmarks/results/study_scale.csv`.\n\n"
         "Cert. error: lpbounds' certified bound on max |values - exact optimum| of the "
         "returned point (relative: / (max|R|/(1-lambda))); max dev: against the exact fixed "

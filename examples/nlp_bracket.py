@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import lpbounds as lb
-from lpbounds.formulations.nlp import NLP
+from lpbounds.formulations.nlp.problem import NLP
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -292,7 +292,7 @@ def test_models_are_package_data_and_resolve_from_any_directory(tmp_path, monkey
     """Every file of the repository's models/ is in the package's folder, and a bare name,
     a file name and the README's models/... path all resolve there from a directory
     without a models/ folder."""
-    from lpbounds.instances import load_instance, packaged_models_dir, resolve_instance_path
+    from lpbounds.model.instances import load_instance, packaged_models_dir, resolve_instance_path
 
     repo_models = Path(__file__).resolve().parents[1] / "models"
     packaged = packaged_models_dir()

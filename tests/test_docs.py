@@ -81,7 +81,7 @@ def _assert_rendered(site: Path) -> None:
     api = (site / "api" / "formulations" / "index.html").read_text()
     assert api.count('class="arithmatex"') >= 5  # the LPs' .. math:: blocks
     models = (site / "api" / "models" / "index.html").read_text()
-    assert 'href="#lpbounds.mdp.FiniteMDP.user_values"' in models  # a :meth: cross-link
+    assert 'href="#lpbounds.model.mdp.FiniteMDP.user_values"' in models  # a :meth: cross-link
     assert "autorefs-internal" in api
 
 

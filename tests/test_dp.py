@@ -309,10 +309,10 @@ def test_property_every_eval_sweeps_is_certified(n, a, ll, lam, frac, seed):
 def test_auto_eval_sweeps_waits_for_a_settled_policy():
     """The "auto" rule: no evaluation sweeps after the first improvement or while more
     than AUTO_SETTLED of the states change their action; AUTO_EVAL_SWEEPS after."""
-    from lpbounds.dp import AUTO_EVAL_SWEEPS, AUTO_SETTLED, _EvalPlan
+    from lpbounds.dp import AUTO_EVAL_SWEEPS, AUTO_SETTLED, EvalPlan
 
     n = 1000
-    plan = _EvalPlan("auto")
+    plan = EvalPlan("auto")
     arg = np.zeros(n, dtype=np.int64)
     assert plan.count(arg) == 0  # the first policy: every state "changed"
     arg[: int(AUTO_SETTLED * n) + 1] = 1
@@ -320,9 +320,9 @@ def test_auto_eval_sweeps_waits_for_a_settled_policy():
     arg[: int(AUTO_SETTLED * n)] = 2
     assert plan.count(arg) == AUTO_EVAL_SWEEPS  # at it
     assert plan.count(arg) == AUTO_EVAL_SWEEPS  # unchanged
-    fixed = _EvalPlan(3)
+    fixed = EvalPlan(3)
     assert fixed.ever and fixed.count(arg) == 3 and fixed.count(arg + 1) == 3
-    assert not _EvalPlan(0).ever
+    assert not EvalPlan(0).ever
     # on a model: sweeps = improvements + AUTO_EVAL_SWEEPS x (settled improvements), and
     # the first improvement is followed directly by the second
     mdp = lb.garnet(3000, 3, 4, 0.95, seed=7)

@@ -7,7 +7,7 @@ path claims the *same arithmetic*, so the tests below ask for bit-identical resu
 compare both with plain-numpy references from ``conftest``.
 
 Every test runs twice, on the numpy twins of the kernels (what small models use) and on
-the compiled kernels (what large ones use; :mod:`lpbounds._backend`), and the tests at the
+the compiled kernels (what large ones use; :mod:`lpbounds._kernels.dispatch`), and the tests at the
 end compare the two paths with each other, bit for bit. Identical numbers could still be
 identically wrong, so each result's certificate is also held to its promise both ways
 against ``tests/_independent`` (numpy only): the true error within ``error_bound``, and
@@ -24,7 +24,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lpbounds as lb
-from lpbounds import _backend, _kernels, _npkernels
+from lpbounds._kernels import compiled as _kernels
+from lpbounds._kernels import dispatch as _backend
+from lpbounds._kernels import twins as _npkernels
 from lpbounds.dp import exact_rows, post_decision_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
 from lpbounds.rows import PostDecisionRows
@@ -142,7 +144,7 @@ def test_random_post_decision_mdp_equals_plain(seed, allowed_fraction):
     v = np.random.default_rng(seed).normal(size=mdp.n_states)
     out = np.empty_like(v)
     act = ps.new_arg()
-    lo, hi = ps._sweep_max(v, out, act, 7)
+    lo, hi = ps.sweep_max(v, out, act, nchunks=7)
     q = reference_bellman(mdp, v)
     np.testing.assert_allclose(out, q.max(axis=1), rtol=0, atol=1e-14, err_msg="T v")
     assert np.array_equal(act, q.argmax(axis=1)), "first maximising action"
@@ -347,7 +349,7 @@ def test_numpy_operators_equal_compiled_bit_for_bit(monkeypatch, seed, shared):
         gv, garg = agg_min.apply_maxmin(w)
         pol = rows.evaluate_rows(arg, v)
         out = np.empty(mdp.n_states)
-        stats = rows._sweep_policy(arg, v, out, rows._chunks())
+        stats = rows.sweep_policy(arg, v, out)
         cert = lb.certify(agg_max, w)
         return rows, agg_max, agg_min, q, tv, arg, gv, garg, pol, stats, cert
 
@@ -513,7 +515,7 @@ def test_thread_choice_changes_no_number(monkeypatch, form, method):
 
     monkeypatch.setattr(_backend, "SMALL_READS", COMPILED)
     monkeypatch.setattr(dp, "SERIAL_SWEEP_READS", 0)  # the choice runs on this small model
-    monkeypatch.setattr(dp._ThreadChoice, "RECHECK", 1)  # and switches as often as it can
+    monkeypatch.setattr(dp.ThreadChoice, "RECHECK", 1)  # and switches as often as it can
     mdp = PatrolModel(PatrolParams(N=6, stations=(0, 3), Gamma=4)).mdp()
     model = mdp if form == "post-decision" else exact_rows(mdp)
     before = numba.get_num_threads()
@@ -542,7 +544,7 @@ def test_thread_choice_follows_the_timings(monkeypatch):
     try:
         rows = exact_rows(lb.garnet(20, 2, 2))
         for fast, slow in ((1, 2), (2, 1)):
-            ch = dp._ThreadChoice(rows)
+            ch = dp.ThreadChoice(rows)
             assert ch.many == 2
             n_cal = ch.n_calibrate
             for i in range(n_cal):
@@ -571,14 +573,14 @@ def test_thread_choice_follows_the_timings(monkeypatch):
             ch.restore()
             assert numba.get_num_threads() == 2
         # all threads only when clearly faster (PREFER): 10% is not enough
-        ch = dp._ThreadChoice(rows)
+        ch = dp.ThreadChoice(rows)
         for _ in range(ch.n_calibrate):
             k = ch.start("policy")
             ch.stop("policy", k, 0.9 if k == 2 else 1.0)
         assert ch.chosen["policy"] == 1 and ch.start("max") == 1
         ch.restore()
         # one slow sweep of the chosen count does not flip the choice (median of three)
-        ch = dp._ThreadChoice(rows)
+        ch = dp.ThreadChoice(rows)
         for _ in range(ch.n_calibrate):
             k = ch.start("max")
             ch.stop("max", k, 1.0 if k == 2 else 3.0)
@@ -617,7 +619,7 @@ def test_property_packed_sweep_equals_the_in_place_sweep(n, a, ll, shared, frac,
     mdp = lb.garnet(n, a, ll, 0.9, seed=seed, shared_probabilities=shared, allowed_fraction=frac)
     rows = exact_rows(mdp)
     rng = np.random.default_rng(seed)
-    packed = rows._evaluator(rows._chunks())
+    packed = rows.evaluator()
     assert isinstance(packed, PackedSweeps)
     assert packed.shared == shared or ll == 1  # one outcome: every row's probability is 1
     for _ in range(2):  # a second policy into the same buffers
@@ -625,7 +627,7 @@ def test_property_packed_sweep_equals_the_in_place_sweep(n, a, ll, shared, frac,
         sel = rows.indptr[:-1] + (rng.random(n) * counts).astype(np.int64)
         v = rng.normal(size=n)
         want = np.empty(n)
-        lo, hi = rows._sweep_policy(sel, v, want, rows._chunks())
+        lo, hi = rows.sweep_policy(sel, v, want)
         packed.set_policy(sel)
         got = np.empty(n)
         assert packed.sweep(v, got) == (lo, hi)

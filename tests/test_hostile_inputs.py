@@ -24,7 +24,7 @@ from lpbounds.formulations.elp import ELP
 from lpbounds.formulations.ib import IB
 from lpbounds.formulations.rlp import RLP
 from lpbounds.formulations.slp import SLP
-from lpbounds.instances import load_instance
+from lpbounds.model.instances import load_instance
 
 N, A, L = 6, 2, 3
 MDP = lb.garnet(N, A, L, 0.9, seed=3)

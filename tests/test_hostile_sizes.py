@@ -18,7 +18,7 @@ import lpbounds as lb
 import lpbounds.validation as validation
 from lpbounds.cli.main import main
 from lpbounds.errors import ValidationError
-from lpbounds.generators import garnet_bytes
+from lpbounds.model.generators import garnet_bytes
 
 HUGE = [10_000_000_000, 2**63 - 1, 2**64 + 1]
 

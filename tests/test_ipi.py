@@ -15,8 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import lpbounds as lb
-from lpbounds import _krylov
 from lpbounds.dp import exact_rows
+from lpbounds.dp import krylov as _krylov
 from lpbounds.patrol import PatrolModel, PatrolParams
 
 from . import _independent as ind

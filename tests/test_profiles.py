@@ -1,4 +1,4 @@
-"""lpbounds.profiles and the study's per-solver summary, against hand-computed values."""
+"""lpbounds.studies.profiles and the study's per-solver summary, against hand-computed values."""
 
 from __future__ import annotations
 
@@ -9,14 +9,14 @@ import pandas as pd
 import pytest
 
 from lpbounds.errors import ValidationError
-from lpbounds.profiles import (
+from lpbounds.studies.profiles import (
     performance_profile,
     performance_ratios,
     plot_performance_profile,
     profile_value,
     shifted_geometric_mean,
 )
-from lpbounds.study_report import profile_tables, solver_summary
+from lpbounds.studies.report import profile_tables, solver_summary
 
 INF = math.inf
 

@@ -132,9 +132,12 @@ def test_maxmin_operator_matches_loops():
 
 @pytest.fixture(params=["numpy", "compiled"])
 def kernels(request, monkeypatch):
-    """Run a test on each kernel path (:mod:`lpbounds._backend`); yields the two modules
+    """Run a test on each kernel path (:mod:`lpbounds._kernels.dispatch`); yields the two modules
     that path calls: (aggregation kernels, sweep kernels)."""
-    from lpbounds import _aggregate, _backend, _kernels, _npkernels
+    from lpbounds._kernels import aggregate as _aggregate
+    from lpbounds._kernels import compiled as _kernels
+    from lpbounds._kernels import dispatch as _backend
+    from lpbounds._kernels import twins as _npkernels
 
     if request.param == "compiled":
         monkeypatch.setattr(_backend, "SMALL_READS", 0)

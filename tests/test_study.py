@@ -1,4 +1,7 @@
-"""lpbounds.study and ``lpbounds compare``: results equal independent solves, skips noted."""
+"""lpbounds.studies.compare and ``lpbounds compare``.
+
+Results equal independent solves; skips are noted.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +13,7 @@ import lpbounds as lb
 from lpbounds.cli.main import main
 from lpbounds.errors import ValidationError
 from lpbounds.formulations.base import INSTALL_HINTS, installed_lp_solvers
-from lpbounds.study import (
+from lpbounds.studies.compare import (
     FORMULATIONS,
     FormulationSpec,
     available_formulations,
@@ -127,7 +130,7 @@ def test_statuses_use_the_shared_vocabulary():
     from types import SimpleNamespace
 
     from lpbounds.status import Status
-    from lpbounds.study import _status
+    from lpbounds.studies.compare import _status
 
     assert _status(SimpleNamespace(status=Status.OPTIMAL)) == "optimal"
     assert _status(SimpleNamespace(status=Status.ITERATION_LIMIT)) == "iteration_limit"
@@ -276,7 +279,7 @@ def test_lp_solvers_read_from_cvxpy_classes(monkeypatch):
     (IPOPT) and DIFFCP (SCS differentiated) are left out whatever cvxpy reports."""
     import cvxpy as cp
 
-    from lpbounds import solver_catalog
+    from lpbounds.formulations import solvers as solver_catalog
 
     fake = ["SCS", "IPOPT", "DIFFCP", "OSQP", "HIGHS", "SDPA"]
     monkeypatch.setattr(cp, "installed_solvers", lambda: fake)
@@ -312,7 +315,7 @@ def test_every_installed_lp_solver_is_in_the_default_study():
 def test_optional_solvers_are_found_when_installed(module, solver):
     import cvxpy as cp
 
-    from lpbounds.solver_catalog import lp_capable_solvers
+    from lpbounds.formulations.solvers import lp_capable_solvers
 
     pytest.importorskip(module, reason=f"{module} is not installed here (optional)")
     if solver not in cp.installed_solvers():
@@ -326,7 +329,7 @@ def test_optional_solvers_are_found_when_installed(module, solver):
 
 
 def test_with_time_limit_merges_each_solvers_keyword():
-    from lpbounds.solver_catalog import with_time_limit
+    from lpbounds.formulations.solvers import with_time_limit
 
     opts, ok = with_time_limit("HIGHS", {"highs_options": {"solver": "ipm"}}, 5.0)
     assert ok and opts == {"highs_options": {"solver": "ipm", "time_limit": 5.0}}
@@ -340,7 +343,7 @@ def test_with_time_limit_merges_each_solvers_keyword():
 
 
 def test_limit_status_rules():
-    from lpbounds.study import _limit_status
+    from lpbounds.studies.compare import _limit_status
 
     assert _limit_status("limit", 1.99, 2.0) == "time_limit"  # USER_LIMIT at the limit
     assert _limit_status("inaccurate", 2.3, 2.0) == "time_limit"  # SCS stops "inaccurate"

@@ -29,7 +29,7 @@ from lpbounds.patrol.params import PatrolParams
 from lpbounds.rows import BellmanRows, PolicySweeps, PostDecisionRows, SweepOperator
 from lpbounds.status import Status
 
-SRC = Path(dp.__file__).resolve().parent
+SRC = Path(dp.__file__).resolve().parents[1]
 #: a small patrol (numpy array path) and one above SMALL_READS (compiled array path)
 PARAMS = {
     "small": PatrolParams(N=5, stations=(0, 2), D=2, Gamma=6),
@@ -267,7 +267,7 @@ def test_no_patrol_module_uses_private_names_of_dp_or_matrix_free(path):
 
 def test_dp_uses_only_the_public_protocol():
     """dp reaches the operators through SweepOperator's methods, not their private ones."""
-    tree = _tree(SRC / "dp.py")
+    tree = _tree(SRC / "dp/__init__.py")
     privates = {"_sweep_max", "_sweep_policy", "_sweep_maxmin", "_evaluator", "_chunks"}
     used = {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
     assert not used & privates

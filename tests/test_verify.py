@@ -1,4 +1,7 @@
-"""lpbounds.verify and ``lpbounds verify``: three-valued verdicts from certified intervals."""
+"""lpbounds.studies.verify and ``lpbounds verify``.
+
+Three-valued verdicts from certified intervals.
+"""
 
 from __future__ import annotations
 
@@ -10,8 +13,8 @@ import pytest
 import scipy.optimize as so
 
 import lpbounds as lb
-import lpbounds.verify as verify
-from lpbounds.checks import compare_at_least, compare_equal
+import lpbounds.studies.verify as verify
+from lpbounds.certification.checks import compare_at_least, compare_equal
 from lpbounds.cli.main import main
 from lpbounds.errors import SolverNotInstalledError, ValidationError
 from lpbounds.formulations import RLP, SLP
@@ -112,7 +115,7 @@ def test_objective_bracket_is_tight_for_a_non_unique_optimum():
     """A cost with zeros: Clarabel returns a point inside the optimal face, far from V* where
     c = 0 (wide per-entry bracket); the duality bound still pins c'V* (policy iteration in
     tests/_independent)."""
-    from lpbounds.checks import lp_bracket, lp_objective_bracket
+    from lpbounds.certification.checks import lp_bracket, lp_objective_bracket
     from lpbounds.formulations import ELP
 
     mdp = lb.garnet(31, 2, 3, 0.685, seed=4)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from ._defaults import VERSION
 from .errors import (
     ConvergenceError,
     LPBoundsError,
@@ -29,7 +30,7 @@ from .errors import (
 from .status import Status, Verdict
 
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time see __getattr__
-    from .certificate import Certificate, certify
+    from .certification.certificate import Certificate, certify
     from .dp import (
         DPResult,
         PolicyEvaluation,
@@ -41,18 +42,19 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time see __getattr_
         solve_exact,
         solve_game,
     )
-    from .generators import garnet, random_partition
-    from .instances import Instance, load_instance
-    from .mdp import FiniteMDP
-    from .partition import Partition
+    from .model.generators import garnet, random_partition
+    from .model.instances import Instance, load_instance
+    from .model.mdp import FiniteMDP
+    from .model.partition import Partition
+    from .results import Result
     from .rows import BellmanRows
 
-__version__ = "0.1.0"
+__version__ = VERSION
 
 #: public name -> the submodule that defines it (imported on first access)
 _LAZY: dict[str, str] = {
-    "Certificate": "certificate",
-    "certify": "certificate",
+    "Certificate": "certification.certificate",
+    "certify": "certification.certificate",
     "DPResult": "dp",
     "PolicyEvaluation": "dp",
     "PorteusBounds": "dp",
@@ -62,38 +64,49 @@ _LAZY: dict[str, str] = {
     "porteus_bounds": "dp",
     "solve_exact": "dp",
     "solve_game": "dp",
-    "garnet": "generators",
-    "random_partition": "generators",
-    "Instance": "instances",
-    "load_instance": "instances",
-    "FiniteMDP": "mdp",
-    "Partition": "partition",
+    "garnet": "model.generators",
+    "random_partition": "model.generators",
+    "Instance": "model.instances",
+    "load_instance": "model.instances",
+    "FiniteMDP": "model.mdp",
+    "Partition": "model.partition",
     "BellmanRows": "rows",
+    "Result": "results",
 }
 
-#: submodules reachable as attributes (``lpbounds.dp``) without importing them first
-_SUBMODULES = frozenset(
-    {
-        "certificate",
-        "checks",
-        "cli",
-        "dp",
-        "errors",
-        "formulations",
-        "generators",
-        "instances",
-        "mdp",
-        "outputs",
-        "partition",
-        "patrol",
-        "rows",
-        "status",
-        "study",
-        "tolerances",
-        "validation",
-        "verify",
-    }
-)
+#: submodules reachable as attributes (``lpbounds.dp``) without importing them first: the
+#: layer packages and the shared vocabulary, and under their earlier flat names the modules
+#: that moved into a layer package (``lpbounds.mdp`` is :mod:`lpbounds.model.mdp`)
+_SUBMODULES: dict[str, str] = {
+    **{
+        name: name
+        for name in (
+            "certification",
+            "cli",
+            "dp",
+            "errors",
+            "formulations",
+            "model",
+            "outputs",
+            "patrol",
+            "results",
+            "rows",
+            "status",
+            "stochastic",
+            "studies",
+            "tolerances",
+            "validation",
+        )
+    },
+    "certificate": "certification.certificate",
+    "checks": "certification.checks",
+    "generators": "model.generators",
+    "instances": "model.instances",
+    "mdp": "model.mdp",
+    "partition": "model.partition",
+    "study": "studies.compare",
+    "verify": "studies.verify",
+}
 
 __all__ = [
     "BellmanRows",
@@ -106,6 +119,7 @@ __all__ = [
     "Partition",
     "PolicyEvaluation",
     "PorteusBounds",
+    "Result",
     "SolverError",
     "SolverNotInstalledError",
     "Status",
@@ -133,9 +147,9 @@ def __getattr__(name: str) -> Any:
         globals()[name] = value
         return value
     if name in _SUBMODULES:
-        return importlib.import_module(f".{name}", __name__)
+        return importlib.import_module(f".{_SUBMODULES[name]}", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY) | _SUBMODULES)
+    return sorted(set(globals()) | set(_LAZY) | set(_SUBMODULES))

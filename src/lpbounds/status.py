@@ -5,7 +5,7 @@ As linopy's termination conditions do, a status says what lpbounds *knows* about
 returned point, not what a solver claimed:
 
 * :attr:`Status.OPTIMAL` -- a point whose certified error (computed by lpbounds from the
-  point alone, :mod:`lpbounds.certificate`) is within the requested accuracy;
+  point alone, :mod:`lpbounds.certification.certificate`) is within the requested accuracy;
 * :attr:`Status.INACCURATE` -- a point whose certified bracket is valid but wider than
   requested (the bracket still bounds the exact optimum);
 * :attr:`Status.TIME_LIMIT`, :attr:`Status.ITERATION_LIMIT` -- stopped at a limit; the point

@@ -1,6 +1,6 @@
 r"""The row-sum rule shared by every model and row system, and certified row-sum bounds.
 
-A model (:class:`~lpbounds.mdp.FiniteMDP`) and a row system
+A model (:class:`~lpbounds.model.mdp.FiniteMDP`) and a row system
 (:class:`~lpbounds.rows.BellmanRows`) accept the same probabilities: each row's entries
 are above ``-PROBABILITY_NEGATIVE_ATOL`` (and clipped to 0) and sum to one within
 ``PROBABILITY_SUM_ATOL``. Accepted rows are stored **as given**: a row summing to
@@ -83,7 +83,8 @@ class RowSums:
         """``lambda max_r s_r``, rounded up: the rows' contraction modulus (may be >= 1).
 
         Computed as ``lambda * computed_max * (1 + (L + 3) eps)``, the product the LP
-        certificates have always used (:func:`lpbounds.certificate.contraction_modulus`).
+        certificates have always used
+        (:func:`lpbounds.certification.certificate.contraction_modulus`).
         """
         return float(discount) * max(self.computed_max, 0.0) * (1.0 + self.rounding)
 
@@ -97,7 +98,7 @@ def bellman_margin(
     ``(L + 3) eps (|R_r| + kappa max|v|)`` of its exact value; the subtraction adds
     ``eps (max|Tv| + max|v|)``; merged (aggregated) rows add ``L eps kappa max|v|``.
     Doubled, plus a few of the smallest normal numbers for underflow. The allowance of
-    :func:`lpbounds.certificate.certify` and of :func:`lpbounds.porteus_bounds`.
+    :func:`lpbounds.certification.certificate.certify` and of :func:`lpbounds.porteus_bounds`.
     """
     return (
         2.0

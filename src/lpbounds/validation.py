@@ -38,11 +38,9 @@ __all__ = [
     "check_array",
     "check_bool",
     "check_choice",
-    "check_formulation_inputs",
+    "check_discount",
     "check_indices",
     "check_int",
-    "check_model",
-    "check_partition",
     "check_real",
     "check_seed",
     "check_value_scale",
@@ -62,11 +60,11 @@ __all__ = [
 #: rewards: every bound scales linearly with them).
 MAX_VALUE_SCALE: float = 1e300
 
-_NUMERIC_KINDS = frozenset("iuf")
+NUMERIC_KINDS = frozenset("iuf")
 
 
 # ---------------------------------------------------------------------- helpers
-def _show(x: Any) -> str:
+def describe_value(x: Any) -> str:
     """``repr`` of a value with its type, shortened."""
     text = repr(x)
     if len(text) > 60:
@@ -123,11 +121,11 @@ def check_real(
     float
     """
     if not _is_real(x):
-        raise ValidationError(f"{name} must be a real number; got {_show(x)}")
+        raise ValidationError(f"{name} must be a real number; got {describe_value(x)}")
     try:
         v = float(x)
     except OverflowError:  # a Python int beyond float64
-        raise ValidationError(f"{name} = {_show(x)} is beyond float64") from None
+        raise ValidationError(f"{name} = {describe_value(x)} is beyond float64") from None
     if np.isnan(v) or (finite and not np.isfinite(v)):
         raise ValidationError(f"{name} must be a finite number; got {v}")
     below = lo is not None and (v <= lo if lo_open else v < lo)
@@ -141,10 +139,19 @@ def check_real(
     return v
 
 
+def check_discount(discount: Any, name: str = "discount") -> float:
+    """The discount rule every model and row system shares: a real ``0 <= discount < 1``.
+
+    (A discount of 1 has no discounted value; whether the rows' sums times the discount
+    stay below 1 is :func:`lpbounds.stochastic.check_rows`'s check.)
+    """
+    return check_real(name, discount, lo=0.0, hi=1.0, hi_open=True)
+
+
 def check_int(name: str, x: Any, *, lo: int | None = None, hi: int | None = None) -> int:
     """``x`` as an int, refusing booleans, strings and floats (even ``3.0``); ``lo <= x <= hi``."""
     if not is_int(x):
-        raise ValidationError(f"{name} must be an integer; got {_show(x)}")
+        raise ValidationError(f"{name} must be an integer; got {describe_value(x)}")
     v = int(x)
     if (lo is not None and v < lo) or (hi is not None and v > hi):
         lo_s = "-inf" if lo is None else str(lo)
@@ -156,7 +163,7 @@ def check_int(name: str, x: Any, *, lo: int | None = None, hi: int | None = None
 def check_bool(name: str, x: Any) -> bool:
     """``x`` if it is a bool (Python or NumPy); 0/1, strings and None are refused."""
     if not isinstance(x, (bool, np.bool_)):
-        raise ValidationError(f"{name} must be True or False; got {_show(x)}")
+        raise ValidationError(f"{name} must be True or False; got {describe_value(x)}")
     return bool(x)
 
 
@@ -171,7 +178,7 @@ def check_choice(name: str, x: Any, choices: Iterable[str]) -> str:
     """``x`` if it is one of the strings ``choices``."""
     options = tuple(choices)
     if not isinstance(x, str) or x not in options:
-        raise ValidationError(f"{name} must be one of {list(options)}; got {_show(x)}")
+        raise ValidationError(f"{name} must be one of {list(options)}; got {describe_value(x)}")
     return x
 
 
@@ -191,13 +198,13 @@ def as_array(name: str, x: Any) -> np.ndarray:
 def _check_kind(name: str, arr: np.ndarray, integer: bool) -> np.ndarray:
     """Refuse strings, booleans, complex and non-numeric objects (by dtype, before a cast)."""
     kind = arr.dtype.kind
-    if kind in _NUMERIC_KINDS:
+    if kind in NUMERIC_KINDS:
         return arr
     if kind == "O":
         for idx, item in np.ndenumerate(arr):
             if not (is_int(item) if integer else _is_real(item)):
                 raise ValidationError(
-                    f"{entry(name, idx)} = {_show(item)} is not "
+                    f"{entry(name, idx)} = {describe_value(item)} is not "
                     f"{'an integer' if integer else 'a real number'}"
                 )
             if integer and not -(2**63) <= int(item) < 2**63:
@@ -331,54 +338,6 @@ def check_value_scale(reward_absmax: float, discount: float, name: str = "reward
             f"{MAX_VALUE_SCALE:g}: float64 arithmetic on them would overflow; rescale the "
             f"{name} (bounds scale linearly with them)"
         )
-
-
-# ---------------------------------------------------------------------- model objects
-def check_model(mdp: Any, name: str = "mdp") -> Any:
-    """``mdp`` if it is a :class:`~lpbounds.mdp.FiniteMDP`."""
-    from .mdp import FiniteMDP
-
-    if not isinstance(mdp, FiniteMDP):
-        raise ValidationError(f"{name} must be a FiniteMDP; got {_show(mdp)}")
-    return mdp
-
-
-def check_partition(partition: Any, mdp: Any = None, name: str = "partition") -> Any:
-    """``partition`` if it is a :class:`~lpbounds.partition.Partition` (of ``mdp``'s states)."""
-    from .partition import Partition
-
-    if not isinstance(partition, Partition):
-        raise ValidationError(f"{name} must be a Partition; got {_show(partition)}")
-    if mdp is not None and partition.n_states != mdp.n_states:
-        raise ValidationError(
-            f"the partition has {partition.n_states} states but the MDP has {mdp.n_states}"
-        )
-    return partition
-
-
-_NO_PARTITION = object()
-
-
-def check_formulation_inputs(mdp: Any, partition: Any = _NO_PARTITION, **arrays: Any) -> None:
-    """The shared argument checks of a formulation's constructor.
-
-    ``mdp`` must be a FiniteMDP, ``partition`` (when the formulation takes one) a
-    Partition of its states, and each keyword array that is not None (costs, weights,
-    a basis) must hold real numbers (dtype checked before the formulation casts it;
-    shapes, signs and finiteness are the formulation's own checks). A scipy.sparse
-    matrix is checked by its dtype.
-    """
-    check_model(mdp)
-    if partition is not _NO_PARTITION:
-        check_partition(partition, mdp)
-    for key, value in arrays.items():
-        if value is None:
-            continue
-        if hasattr(value, "tocsr") and hasattr(value, "dtype"):  # scipy.sparse
-            if value.dtype.kind not in _NUMERIC_KINDS:
-                raise ValidationError(f"{key} must hold real numbers; got dtype {value.dtype}")
-            continue
-        check_array(key, value, finite=False)
 
 
 # ---------------------------------------------------------------------- sizes

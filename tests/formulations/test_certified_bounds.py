@@ -244,7 +244,7 @@ def test_a_point_below_vstar_is_not_optimal():
     succ, probs, rewards, allowed, lam = _queue(capacity=30)
     mdp = _model(succ, probs, rewards, allowed, lam)
     vstar, err = _vstar(succ, probs, rewards, allowed, lam)
-    from lpbounds.certificate import certify
+    from lpbounds.certification.certificate import certify
     from lpbounds.dp import exact_rows
 
     point = vstar - 0.01 * np.abs(vstar)

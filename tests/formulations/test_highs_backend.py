@@ -238,7 +238,7 @@ def test_cvxpy_path_reports_an_infeasible_modification_as_infeasible():
 def test_dual_ray_of_a_highspy_without_get_dual_ray():
     """highspy 1.7 (the minimum version) has no getDualRay: an infeasible LP through the cvxpy
     path then carries no ray (NaN) instead of failing with AttributeError."""
-    from lpbounds.formulations._highs import _dual_ray
+    from lpbounds.formulations.highs import _dual_ray
 
     st, has_ray, ray = _dual_ray(object(), 3)
     assert st is None and has_ray is False and ray.shape == (3,) and np.isnan(ray).all()

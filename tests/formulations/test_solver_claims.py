@@ -19,7 +19,7 @@ import pytest
 import lpbounds as lb
 from lpbounds.formulations import ALP, ELP, RLP, installed_lp_solvers
 from lpbounds.formulations import base as base_mod
-from lpbounds.formulations._highs import HighsRun
+from lpbounds.formulations.highs import HighsRun
 from lpbounds.status import Status
 
 HAVE_CLARABEL = "CLARABEL" in installed_lp_solvers()
@@ -228,7 +228,7 @@ def test_true_claims_pass_through(monkeypatch):
 
 def test_compare_and_verify_count_a_false_claim_as_a_failure(monkeypatch):
     from lpbounds import verify
-    from lpbounds.study import run_study
+    from lpbounds.studies.compare import run_study
 
     monkeypatch.setattr(cp.Problem, "solve", _claiming(cp.INFEASIBLE))
     study = run_study(["garnet:30:4:2"], ["RLP"], ["CLARABEL"], jobs=1)

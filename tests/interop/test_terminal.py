@@ -18,8 +18,8 @@ import pytest
 import scipy.sparse as sp
 
 import lpbounds as lb
-from lpbounds import interop
 from lpbounds.errors import ValidationError
+from lpbounds.model import interop
 
 from ._reference import brute_force
 

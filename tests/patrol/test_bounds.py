@@ -240,7 +240,7 @@ def test_allowed_actions_are_constant_on_each_partition(case):
 def test_lblp_equals_nlp_of_full_mdp_and_bounds_v_star_on_patrol_small():
     """models/patrol-small.toml: LBLP (built from keys) against the NLP class on the full
     MDP (the masked rule applied), both certified, and both below min V* on each part."""
-    from lpbounds.certificate import certify
+    from lpbounds.certification.certificate import certify
     from lpbounds.formulations import NLP
     from lpbounds.patrol.instance import params_from_instance
 

@@ -17,7 +17,7 @@ import pytest
 
 from lpbounds import evaluate_policy, greedy_policy, solve_exact
 from lpbounds.errors import ValidationError
-from lpbounds.instances import load_instance
+from lpbounds.model.instances import load_instance
 from lpbounds.patrol import PatrolModel, PatrolParams
 from lpbounds.patrol.greedy_mc import (
     default_horizon,

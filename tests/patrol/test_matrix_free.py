@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from lpbounds import evaluate_policy, greedy_policy, solve_exact
-from lpbounds._backend import SMALL_READS
+from lpbounds._kernels.dispatch import SMALL_READS
 from lpbounds.errors import ValidationError
 from lpbounds.patrol.greedy_mc import partition_bounds
 from lpbounds.patrol.instance import params_from_instance

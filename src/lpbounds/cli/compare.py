@@ -1,4 +1,7 @@
-"""``lpbounds compare [MODELS...]``: a solver comparison study (see :mod:`lpbounds.study`)."""
+"""``lpbounds compare [MODELS...]``: a solver comparison study.
+
+See :mod:`lpbounds.studies.compare`.
+"""
 
 from __future__ import annotations
 
@@ -21,7 +24,7 @@ from ._common import check_output_dir, console, positive_float, print_table, pro
 log = logging.getLogger("lpbounds")
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "compare",
         help="solve every (instance, formulation, solver) and tabulate accuracy and time",
@@ -179,7 +182,7 @@ def _instance_table(instance: str, rows: Any) -> tuple[Table, list[str]]:
 
 def _solver_table(summary: Any, shifts: list[float]) -> Table:
     """Per solver configuration: status counts and shifted geometric means (100 columns)."""
-    from ..study_report import sgm_column
+    from ..studies.report import sgm_column
 
     table = Table(
         title=Text("per solver (solved = certified within the accuracy)", "bold"),
@@ -225,7 +228,7 @@ COMPARE_FILES: tuple[str, ...] = (
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..study import run_study, save_study
+    from ..studies.compare import run_study, save_study
 
     check_output_dir(args.out, "--out", replaceable=COMPARE_FILES)
     with progress() as prog:

@@ -46,7 +46,7 @@ EPILOG = "exit status:\n" + "\n".join(f"  {code:<4} {text}" for code, text in EX
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every registered subcommand."""
-    from .. import __version__
+    from .._defaults import VERSION as __version__
 
     parser = argparse.ArgumentParser(
         prog="lpbounds",

@@ -1,5 +1,5 @@
 """``lpbounds score DIR SOLUTION``: measure a solver's answer against an export's exact
-optimum and certify it (see :func:`lpbounds.export.score_solution`)."""
+optimum and certify it (see :func:`lpbounds.studies.export.score_solution`)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from ..tolerances import LP_CERT_RTOL
 from ._common import check_output_file, positive_float, print_table
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "score",
         help="score a solution file against an lpbounds export (objective error, deviation, "
@@ -47,8 +47,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..export import score_solution
     from ..outputs import run_metadata, write_text_atomic
+    from ..studies.export import score_solution
 
     if args.json:
         check_output_file(args.json, "--json")

@@ -6,7 +6,7 @@
 * ``solution.npz``: ``values`` (V*, as computed), ``policy`` (an action index per state,
   greedy with respect to ``values``), ``lower`` and ``upper``: the certificate, a bracket
   ``lower <= V* <= upper`` computed from ``values`` alone in floating point
-  (:func:`lpbounds.certificate.certify` on the MDP's Bellman rows); for a model with
+  (:func:`lpbounds.certification.certificate.certify` on the MDP's Bellman rows); for a model with
   ``sense = "min"`` or an added sink also ``user_values``, ``user_policy``,
   ``user_lower``, ``user_upper`` in the user's terms;
 * ``solution.json``: the statistics, the certificate's numbers (residuals, rounding
@@ -38,7 +38,7 @@ from ._common import (
 )
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("solve", help="solve an instance exactly (VI / PI / MPI)")
     add_model_argument(p)
     p.add_argument("--method", choices=("mpi", "vi", "pi", "ipi"), default="mpi")
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..dp import solve_exact
-    from ..instances import load_instance
+    from ..model.instances import load_instance
 
     inst = load_instance(args.model)
     if args.json:
@@ -124,7 +124,7 @@ def write_solution(out: str, mdp: Any, result: Any, stats: dict[str, Any]) -> Pa
     """Write ``--out``: the solution with its certificate (see the module docstring)."""
     import numpy as np
 
-    from ..certificate import certify
+    from ..certification.certificate import certify
     from ..dp import exact_rows
 
     cert = certify(exact_rows(mdp), result.values)
@@ -149,7 +149,7 @@ def write_solution(out: str, mdp: Any, result: Any, stats: dict[str, Any]) -> Pa
         "action_names": list(mdp.action_names),
         "certificate": {
             "what": "lower <= V* <= upper entrywise, certified from values alone "
-            "(lpbounds.certificate.certify on the Bellman rows, rounding included)",
+            "(lpbounds.certification.certificate.certify on the Bellman rows, rounding included)",
             "residual_up": cert.residual_up,
             "residual_down": cert.residual_down,
             "margin": cert.margin,

@@ -1,7 +1,7 @@
 """``lpbounds verify [MODEL]``: theorem verdicts (holds / violated / inconclusive) per solver.
 
 Exit status 1 only when a claim is *violated* (the certified intervals prove it false);
-``--strict`` also fails on *inconclusive*. See :mod:`lpbounds.verify`."""
+``--strict`` also fails on *inconclusive*. See :mod:`lpbounds.studies.verify`."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from ..tolerances import LP_COMPARE_RTOL
 from ._common import console, print_table, progress
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "verify",
         help="check Lemma 1, Theorems 1-2, Lemma 2 and Remark 2 across LP solvers",
@@ -62,7 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def run(args: argparse.Namespace) -> int:
     from ..formulations import resolve_solver
-    from ..verify import (
+    from ..studies.verify import (
         default_solvers,
         exit_status,
         model_instances,
@@ -114,12 +114,12 @@ def _verdict(v: str) -> str:
     return f"[{_STYLE[v]}]{v}[/]"
 
 
-def _records_tables(records: list[dict]) -> list[Table]:  # type: ignore[type-arg]
+def _records_tables(records: list[dict]) -> list[Table]:
     """The records, one table per instance, each at most 100 columns wide (the claim and
     how it was checked fold; the numbers never do)."""
     counts = {v: sum(r["verdict"] == v for r in records) for v in _STYLE}
     tables: list[Table] = []
-    by_instance: dict[str, list[dict]] = {}  # type: ignore[type-arg]
+    by_instance: dict[str, list[dict]] = {}
     for r in records:
         by_instance.setdefault(r["instance"], []).append(r)
     for i, (instance, rows) in enumerate(by_instance.items()):
@@ -157,7 +157,7 @@ def _records_tables(records: list[dict]) -> list[Table]:  # type: ignore[type-ar
     return tables
 
 
-def _record_cells(r: dict) -> tuple[str, ...]:  # type: ignore[type-arg]
+def _record_cells(r: dict) -> tuple[str, ...]:
     detail = r["detail"]
     if r["verdict"] == "violated":
         lo, hi = r["lp_interval"], r["exact_interval"]
@@ -176,8 +176,8 @@ def _record_cells(r: dict) -> tuple[str, ...]:  # type: ignore[type-arg]
     )
 
 
-def _summary_table(records: list[dict]) -> Table:  # type: ignore[type-arg]
-    from ..verify import summarize
+def _summary_table(records: list[dict]) -> Table:
+    from ..studies.verify import summarize
 
     summary = Table(
         title="summary: verdicts of each check and solver (worst record)",

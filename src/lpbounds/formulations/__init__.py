@@ -4,7 +4,7 @@ from .alp import ALP, CostDependenceExample, find_cost_dependent_alp, soft_aggre
 from .base import Formulation, LPResult, Status, installed_lp_solvers, resolve_solver
 from .elp import ELP
 from .ib import IB, LLP
-from .nlp import NLP, NLPMILP, NLPIteration, NLPResult
+from .nlp.problem import NLP, NLPMILP, NLPIteration, NLPResult
 from .rlp import RLP
 from .rows_lp import RowsLP
 from .slp import SLP

@@ -13,8 +13,8 @@ import cvxpy as cp
 import numpy as np
 
 from ..dp import exact_rows
-from ..mdp import FiniteMDP
-from ..validation import check_formulation_inputs
+from ..model.checks import check_formulation_inputs
+from ..model.mdp import FiniteMDP
 from .rows_lp import RowsLP
 
 __all__ = ["ELP"]
@@ -75,6 +75,8 @@ class ELP(RowsLP):
         """The cvxpy variable ``V`` (one entry per state)."""
         return self.variables["V"]
 
-    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+    def _interpret(
+        self, x: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         values, _, mu, extra = super()._interpret(x, y)
         return values, values, mu, extra

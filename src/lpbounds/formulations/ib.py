@@ -13,12 +13,13 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from ..certificate import Certificate, certify
+from ..certification.certificate import Certificate, certify
 from ..errors import ValidationError
-from ..mdp import FiniteMDP
-from ..partition import Partition
+from ..model.checks import check_formulation_inputs
+from ..model.mdp import FiniteMDP
+from ..model.partition import Partition
 from ..rows import BellmanRows
-from ..validation import check_allocation, check_formulation_inputs
+from ..validation import check_allocation
 from .base import Formulation, check_cost
 from .rows_lp import RowsLP
 
@@ -109,7 +110,9 @@ class IB(RowsLP):
         """``[v_1, ..., v_L]``: the cvxpy variable of each block."""
         return [self.variables[f"v_{j}"] for j in range(1, self.L + 1)]
 
-    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+    def _interpret(
+        self, x: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         m = self.partition.n_partitions
         blocks = x.reshape(self.L, m)
         yb = y.reshape(self.L, self.base_rows.n_rows)
@@ -303,7 +306,9 @@ class LLP(Formulation):
         """The cvxpy variable ``z`` (one surplus per allowed pair, rows of :attr:`pairs`)."""
         return self.variables["z"]
 
-    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+    def _interpret(
+        self, x: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         m, k = self._m, self.pairs.shape[0]
         v = x[:m]
         z = np.zeros(self.d.shape)

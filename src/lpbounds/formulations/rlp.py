@@ -18,10 +18,10 @@ from typing import Any
 import cvxpy as cp
 import numpy as np
 
-from ..mdp import FiniteMDP
-from ..partition import Partition
+from ..model.checks import check_formulation_inputs
+from ..model.mdp import FiniteMDP
+from ..model.partition import Partition
 from ..rows import BellmanRows
-from ..validation import check_formulation_inputs
 from .base import aggregated_cost
 from .rows_lp import RowsLP
 
@@ -88,7 +88,9 @@ class RLP(RowsLP):
         """The cvxpy variable ``v`` (one entry per partition)."""
         return self.variables["v"]
 
-    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+    def _interpret(
+        self, x: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         values, _, mu, extra = super()._interpret(x, y)
         extra = {**extra, "mdp": self.mdp, "partition": self.partition}
         return values, self.partition.lift(values), mu, extra

@@ -3,7 +3,8 @@ r"""The LP of a Bellman row system: ``min c'v  s.t.  v(owner_r) >= q_r(v)`` for 
 ELP, RLP, UBLP and LBLP are all of this form; they differ only in their rows. By
 Fact 1 of :mod:`lpbounds.rows` the optimum for any cost ``c >= 0`` is the least
 feasible point, the fixed point of the max over the rows, which :meth:`RowsLP.fixed_point`
-computes without a solver, and :func:`lpbounds.certificate.certify` turns any returned point
+computes without a solver, and :func:`lpbounds.certification.certificate.certify` turns any
+returned point
 into a certified bracket on that optimum (the result's ``lower_values``/``upper_values``).
 """
 
@@ -13,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from ..certificate import Certificate, certify
+from ..certification.certificate import Certificate, certify
 from ..dp import solve_exact
 from ..rows import BellmanRows
-from ._highs import tight_basis
 from .base import Formulation, check_cost
+from .highs import tight_basis
 
 __all__ = ["RowsLP"]
 
@@ -99,7 +100,7 @@ class RowsLP(Formulation):
         optimal policy both are feasible, so HiGHS' simplex method stops after factorising
         the basis and checking it (0 iterations; a few when DP's policy is optimal only to
         its tolerance). What the result then proves: the point's bracket
-        ``lower_values <= v* <= upper_values`` from :func:`lpbounds.certify`, as for any
+        ``lower_values <= v* <= upper_values`` from :func:`lpbounds.certification`, as for any
         solve; and, from the returned duals, ``dual_residual = ||A'y - c||_inf`` and
         ``gap = |c'x - b'y|`` computed by lpbounds (``y >= 0`` is dual feasible up to
         ``dual_residual``, so ``b'y`` is a lower bound on the optimum up to it:

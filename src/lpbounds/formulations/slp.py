@@ -51,10 +51,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ValidationError
-from ..mdp import FiniteMDP
-from ..partition import Partition
+from ..model.checks import check_formulation_inputs
+from ..model.mdp import FiniteMDP
+from ..model.partition import Partition
 from ..rows import BellmanRows
-from ..validation import check_formulation_inputs
 from .base import LPResult, aggregated_cost
 from .rows_lp import RowsLP
 
@@ -202,7 +202,9 @@ class SLP(RowsLP):
         """The cvxpy variable ``v`` (one entry per partition)."""
         return self.variables["v"]
 
-    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+    def _interpret(
+        self, x: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         rp = self.row_of_pair
         mu = np.where(rp >= 0, y[np.maximum(rp, 0)] * self.weights, 0.0)
         return x, self.partition.lift(x), mu, {"row_duals": y}

@@ -28,9 +28,9 @@ from functools import lru_cache
 from typing import Any
 
 from ..errors import ValidationError
-from ..instances import Instance, check_keys
-from ..mdp import FiniteMDP
-from ..partition import Partition
+from ..model.instances import Instance, check_keys
+from ..model.mdp import FiniteMDP
+from ..model.partition import Partition
 from .model import PatrolModel
 from .params import PatrolParams
 
@@ -60,7 +60,7 @@ def params_from_instance(instance: Instance | str | Any) -> PatrolParams:
     Does not build the MDP.
     """
     if not isinstance(instance, Instance):
-        from ..instances import load_instance
+        from ..model.instances import load_instance
 
         instance = load_instance(instance)
     if instance.kind != "patrol":

@@ -177,7 +177,7 @@ class PatrolParams:
         (a typo) raises :class:`~lpbounds.errors.ValidationError` naming it. ``kind`` is
         ignored.
         """
-        from ..instances import check_keys
+        from ..model.instances import check_keys
 
         defaults = {f.name: f.default for f in dataclasses.fields(cls) if f.init}
         values = check_keys(table, defaults, "model")

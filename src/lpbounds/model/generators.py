@@ -6,17 +6,18 @@ import math
 
 import numpy as np
 
-from .errors import ValidationError
-from .mdp import FiniteMDP, index_dtype
-from .partition import Partition
-from .validation import (
+from ..errors import ValidationError
+from ..validation import (
     check_allocation,
     check_bool,
+    check_discount,
     check_int,
     check_real,
     check_seed,
     check_value_scale,
 )
+from .mdp import FiniteMDP, index_dtype
+from .partition import Partition
 
 __all__ = [
     "check_garnet_rewards",
@@ -64,7 +65,7 @@ def garnet(
     n_states = check_int("n_states", n_states, lo=1)
     n_actions = check_int("n_actions", n_actions, lo=1)
     branching = check_int("branching", branching, lo=1)
-    lam = check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
+    lam = check_discount(discount)
     seed = check_seed("seed", seed)
     shared_probabilities = check_bool("shared_probabilities", shared_probabilities)
     lo, hi = _check_range("reward_range", reward_range)

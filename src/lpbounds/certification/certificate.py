@@ -36,9 +36,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .errors import ValidationError
-from .rows import BellmanRows
-from .stochastic import bellman_margin
+from ..errors import ValidationError
+from ..rows import BellmanRows
+from ..stochastic import bellman_margin
 
 __all__ = [
     "Certificate",

@@ -1,13 +1,13 @@
 r"""Certified intervals and the three-valued comparison of two of them.
 
-Shared by :mod:`lpbounds.verify` (theorem verdicts) and :mod:`lpbounds.study` (the
+Shared by :mod:`lpbounds.studies.verify` (theorem verdicts) and :mod:`lpbounds.studies.compare` (the
 ``certified_error`` column of ``lpbounds compare``); it imports only the certificate,
 status and row modules, so neither of those two imports the other.
 
 * :func:`lp_bracket` -- the certified bracket ``lower <= exact optimum <= upper`` of an
   LP of Bellman rows from a returned point, preferring the fields the result already
   carries (``certificate``, else ``lower_values``/``upper_values``), else computing it
-  with :func:`lpbounds.certificate.certify` on the formulation's ``rows``;
+  with :func:`lpbounds.certification.certificate.certify` on the formulation's ``rows``;
 * :func:`lp_objective_bracket` -- a certified bracket on the LP's optimal *objective*
   that stays narrow when the optimum is not unique (a cost with zeros), from the
   certified feasible point above and weak duality below;
@@ -25,8 +25,9 @@ from typing import Any
 
 import numpy as np
 
+from ..results import outward_bracket
+from ..status import Verdict
 from .certificate import certify, dual_objective_bound, objective_bracket
-from .status import Verdict
 
 __all__ = [
     "Bracket",
@@ -132,9 +133,7 @@ def lp_objective_bracket(formulation: Any, result: Any, bracket: Bracket) -> tup
 def dp_interval(dp_result: Any) -> tuple[np.ndarray, np.ndarray]:
     """``[values - error_bound, values + error_bound]`` of a :func:`~lpbounds.dp.solve_exact`
     result, rounded outward by one ulp."""
-    v = np.asarray(dp_result.values, dtype=np.float64)
-    e = float(dp_result.error_bound)
-    return _down(v - e), _up(v + e)
+    return outward_bracket(dp_result.values, float(dp_result.error_bound))
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ A file has a ``[model]`` table whose ``kind`` picks a builder, and optionally a
 ``[partition]`` table::
 
     [model]
-    kind = "garnet"          # a seeded random MDP (lpbounds.generators.garnet)
+    kind = "garnet"          # a seeded random MDP (lpbounds.model.generators.garnet)
     n_states = 500
     n_actions = 3
     branching = 5
@@ -12,7 +12,7 @@ A file has a ``[model]`` table whose ``kind`` picks a builder, and optionally a
     seed = 1
 
     [partition]
-    kind = "random"          # lpbounds.generators.random_partition
+    kind = "random"          # lpbounds.model.generators.random_partition
     n_partitions = 50
     seed = 2
 
@@ -34,10 +34,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from .errors import ValidationError
+from ..errors import ValidationError
+from ..validation import check_bool, check_int, check_real
 from .mdp import FiniteMDP
 from .partition import Partition
-from .validation import check_bool, check_int, check_real
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -56,12 +56,12 @@ __all__ = [
 
 #: kind -> "module:function(config: dict) -> FiniteMDP"
 MODEL_KINDS: dict[str, str] = {
-    "garnet": "lpbounds.instances:_build_garnet",
+    "garnet": "lpbounds.model.instances:_build_garnet",
     "patrol": "lpbounds.patrol.instance:build_mdp",
 }
 #: kind -> "module:function(config: dict, instance: Instance) -> Partition"
 PARTITION_KINDS: dict[str, str] = {
-    "random": "lpbounds.instances:_build_random_partition",
+    "random": "lpbounds.model.instances:_build_random_partition",
     "patrol": "lpbounds.patrol.instance:build_partition",
 }
 

@@ -21,20 +21,21 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from . import interop
-from .errors import ValidationError
-from .stochastic import check_rows
-from .validation import (
+from ..errors import ValidationError
+from ..stochastic import check_rows
+from ..validation import (
     as_array,
     as_float_array,
     check_array,
     check_bool,
     check_choice,
+    check_discount,
     check_indices,
     check_real,
     check_value_scale,
     first_index,
 )
+from . import interop
 
 __all__ = ["FiniteMDP", "index_dtype"]
 
@@ -48,9 +49,9 @@ def _check_successors(succ: np.ndarray, allow: np.ndarray, n: int) -> tuple[int,
     """Out-of-range successors: (count on allowed pairs, first flat index, count elsewhere).
 
     Compiled for large models (one pass, no temporaries: full-size boolean masks cost GBs
-    at 33 M states), plain numpy for small ones (:mod:`lpbounds._backend`).
+    at 33 M states), plain numpy for small ones (:mod:`lpbounds._kernels.dispatch`).
     """
-    from . import _backend
+    from .._kernels import dispatch as _backend
 
     bad, first, bad_disallowed = _backend.sweep_kernels(succ.size, "mdp").check_successors(
         succ, allow, n
@@ -174,7 +175,7 @@ class FiniteMDP:
     # ------------------------------------------------------------------ validation
     @staticmethod
     def _check_discount(discount: float) -> float:
-        return check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
+        return check_discount(discount)
 
     @staticmethod
     def _check_allowed(allowed: Any, n: int, n_actions: int) -> np.ndarray:

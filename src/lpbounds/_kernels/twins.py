@@ -1,5 +1,5 @@
-"""Plain-numpy twins of the compiled kernels of :mod:`lpbounds._kernels` and
-:mod:`lpbounds._aggregate`, for small models.
+"""Plain-numpy twins of the compiled kernels of :mod:`lpbounds._kernels.compiled` and
+:mod:`lpbounds._kernels.aggregate`, for small models.
 
 Each function has the name, arguments and outputs of its compiled twin and the same
 arithmetic: a row's value is ``acc = 0.0; acc += probs[r, l] * v[targets[r, l]]`` for
@@ -8,12 +8,12 @@ multiply-add), then ``reward[r] + discount * acc``; a max (min) keeps the *first
 action that attains it and never picks a NaN; the residual extremes ignore NaNs. So the
 two paths return the same numbers (up to the sign of a zero residual extreme), which
 ``tests/test_fast_paths.py`` checks bit for bit on random models with action masks, and
-the rounding analysis of :mod:`lpbounds.certificate` and
+the rounding analysis of :mod:`lpbounds.certification.certificate` and
 :func:`lpbounds.tolerances.error_bound` covers both.
 
 Loops run over the (few) outcomes or actions, never over states or rows: a sweep costs a
 few numpy calls per outcome, which on a model of a few thousand rows is far less than
-the seconds a first compile takes (:mod:`lpbounds._backend` picks the path by size).
+the seconds a first compile takes (:mod:`lpbounds._kernels.dispatch` picks the path by size).
 ``nchunks`` arguments only balance the compiled kernels' threads and are ignored here.
 """
 
@@ -68,7 +68,7 @@ def q_values(reward, targets, probs, discount, v, out):
 
 
 def bellman_maxmin(indptr, action, reward, targets, probs, discount, v, out, arg):
-    """Stochastic-game operator (see :func:`lpbounds._kernels.bellman_maxmin`)."""
+    """Stochastic-game operator (see :func:`lpbounds._kernels.compiled.bellman_maxmin`)."""
     n_rows = targets.shape[0]
     q = _q(reward, targets, probs, discount, v)
     starts = np.zeros(n_rows, dtype=bool)
@@ -234,7 +234,7 @@ def canonical_rows(
     labels, state, action, succ, probs, n_actions, out_owner, out_t, out_p, out_oa, out_key, nchunks
 ):
     """Aggregated, canonical rows, their ``owner * A + action`` and hash (see
-    :mod:`lpbounds._aggregate`): targets mapped to partitions and stably sorted, equal
+    :mod:`lpbounds._kernels.aggregate`): targets mapped to partitions and stably sorted, equal
     targets merged (probabilities summed in sorted order), zero probabilities dropped."""
     n_rows, n_out = succ.shape
     t = labels[succ]

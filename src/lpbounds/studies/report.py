@@ -1,6 +1,7 @@
 """What a solver study writes: result tables, per-solver summaries, profiles and metadata.
 
-Everything here works on a study's table (one row per solve, :data:`lpbounds.study.COLUMNS`):
+Everything here works on a study's table (one row per solve,
+:data:`lpbounds.studies.compare.COLUMNS`):
 
 * :func:`summarize` -- per (instance, formulation, solver configuration): medians over
   repetitions, the worst certified error;
@@ -10,7 +11,7 @@ Everything here works on a study's table (one row per solve, :data:`lpbounds.stu
   for studies of sub-second solves), an unsolved problem charged the time limit (or, with
   none, the longest solve of the study);
 * :func:`profile_tables` / :func:`plot_profiles` -- Dolan-Moré performance profiles
-  (:mod:`lpbounds.profiles`) of time and, separately, of accuracy (the certified error
+  (:mod:`lpbounds.studies.profiles`) of time and, separately, of accuracy (the certified error
   relative to ``max|R| / (1 - lambda)``), failures counting as unsolved;
 * :func:`study_metadata` -- versions of lpbounds, cvxpy, every solver package of the study
   and what it depends on, the machine, the date and the command line;
@@ -31,14 +32,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._defaults import DEFAULT_SHIFTS
+from .._defaults import DEFAULT_SHIFTS
+from ..status import POINT_STATUSES, Status
 from .profiles import plot_performance_profile, shifted_geometric_mean
-from .status import POINT_STATUSES, Status
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-    from .study import StudyResult
+    from .compare import StudyResult
 
 __all__ = [
     "DEFAULT_SHIFTS",
@@ -269,8 +270,8 @@ def study_metadata(
     """How a study was made: :func:`lpbounds.outputs.run_metadata` (lpbounds, Python,
     dependencies, machine, date), the command line, the study's parameters, and per
     solver of the study its backend, package versions and their requirements' versions."""
-    from .outputs import run_metadata
-    from .solver_catalog import solver_distributions
+    from ..formulations.solvers import solver_distributions
+    from ..outputs import run_metadata
 
     params = dict(result.params)
     solvers = list(dict.fromkeys(c["solver"] for c in params.get("configs", [])))

@@ -1,10 +1,11 @@
 """Models from the neighbours: pymdptoolbox, QuantEcon's ``DiscreteDP`` and MDPSolver.
 
-The converters behind :meth:`FiniteMDP.from_matrices <lpbounds.mdp.FiniteMDP.from_matrices>`,
-:meth:`~lpbounds.mdp.FiniteMDP.from_pymdptoolbox`, :meth:`~lpbounds.mdp.FiniteMDP.from_quantecon`,
-:meth:`~lpbounds.mdp.FiniteMDP.from_transitions` and
-:meth:`~lpbounds.mdp.FiniteMDP.to_quantecon` (the classmethods are thin wrappers; the
-class is passed in, so this module never imports :mod:`lpbounds.mdp`).
+The converters behind :meth:`FiniteMDP.from_matrices <lpbounds.model.mdp.FiniteMDP.from_matrices>`,
+:meth:`~lpbounds.model.mdp.FiniteMDP.from_pymdptoolbox`,
+:meth:`~lpbounds.model.mdp.FiniteMDP.from_quantecon`,
+:meth:`~lpbounds.model.mdp.FiniteMDP.from_transitions` and
+:meth:`~lpbounds.model.mdp.FiniteMDP.to_quantecon` (the classmethods are thin wrappers; the
+class is passed in, so this module never imports :mod:`lpbounds.model.mdp`).
 
 Every input form is first brought to one intermediate: the *pairs* of the model, a
 sparse matrix ``Q`` whose row ``k`` is the distribution of the next state after action
@@ -22,7 +23,7 @@ converter:
   the default, lets it pay its reward first, ``"zero"`` makes the listed states worth 0,
   Gymnasium's and POMDPs.jl's convention). Without ``terminal`` such rows are refused.
   The sink's value is 0 under every policy; :meth:`FiniteMDP.user_values
-  <lpbounds.mdp.FiniteMDP.user_values>` drops it from reported vectors;
+  <lpbounds.model.mdp.FiniteMDP.user_values>` drops it from reported vectors;
 * a pair that is available (allowed, given a finite reward or a reward entry) but has
   no transition at all (an empty row, or no ``[s, a, s', p]`` row) is refused, naming
   the pair, unless its state is listed in ``terminal=``: it is never silently dropped
@@ -31,7 +32,7 @@ converter:
   state listed in ``terminal=``;
 * ``sense="min"``: the rewards are costs to minimise; they are stored negated (the model
   is the reward-maximising problem of the negated costs) and the ``user_*`` helpers of
-  :class:`~lpbounds.mdp.FiniteMDP` translate values and bounds back.
+  :class:`~lpbounds.model.mdp.FiniteMDP` translate values and bounds back.
 """
 
 from __future__ import annotations
@@ -42,15 +43,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import ValidationError
-from .tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
-from .validation import (
+from ..errors import ValidationError
+from ..tolerances import PROBABILITY_NEGATIVE_ATOL, PROBABILITY_SUM_ATOL
+from ..validation import (
     as_array,
     as_float_array,
     check_array,
     check_choice,
+    check_discount,
     check_int,
-    check_real,
     first_index,
 )
 
@@ -79,10 +80,6 @@ _MASK_HINT = (
 
 
 # ---------------------------------------------------------------------- the shared builder
-def _check_discount(discount: Any) -> float:
-    return check_real("discount", discount, lo=0.0, hi=1.0, hi_open=True)
-
-
 def _terminal_states(terminal: Any, n: int) -> tuple[bool, np.ndarray]:
     """``(add a sink, sorted indices of the states that end the process)`` from ``terminal=``."""
     none = np.zeros(0, dtype=np.int64)
@@ -158,7 +155,7 @@ def _check_rows(
     """Finite, non-negative entries; rows summing to less than one only with a sink.
 
     Returns the probability each row misses (0 where complete). Rows summing to more
-    than one are left to :class:`~lpbounds.mdp.FiniteMDP`, which names them.
+    than one are left to :class:`~lpbounds.model.mdp.FiniteMDP`, which names them.
     """
     rows = np.repeat(np.arange(q.shape[0]), np.diff(q.indptr))
     _check_entries(rows, q.indices, q.data, row_name)
@@ -195,7 +192,7 @@ def model_from_pairs(
     Parameters
     ----------
     cls : type
-        :class:`~lpbounds.mdp.FiniteMDP` (or a subclass).
+        :class:`~lpbounds.model.mdp.FiniteMDP` (or a subclass).
     q : scipy.sparse matrix (K, n)
         Row ``k``: the next-state distribution of pair ``(s[k], a[k])``.
     s, a : ndarray of int (K,)
@@ -211,7 +208,7 @@ def model_from_pairs(
         ``unavailable(k)``: how the user's input marks pair ``k`` not available (for the
         message refusing a pair without any transition outside the terminal states).
     terminal, terminal_reward, sense, action_names
-        See the module docstring and :class:`~lpbounds.mdp.FiniteMDP`.
+        See the module docstring and :class:`~lpbounds.model.mdp.FiniteMDP`.
     """
     n, m = shape
     sink, term = _terminal_states(terminal, n)
@@ -329,7 +326,7 @@ def _assemble(
     counts = np.diff(q.indptr)
     to_sink = missing > 0.0
     n_out = max(int((counts + to_sink).max()), 1)
-    idt = np.int32 if n_all < 2**31 - 1 else np.int64  # lpbounds.mdp.index_dtype's rule
+    idt = np.int32 if n_all < 2**31 - 1 else np.int64  # lpbounds.model.mdp.index_dtype's rule
     succ = np.broadcast_to(np.arange(n_all, dtype=idt)[:, None, None], (n_all, m, n_out)).copy()
     prob = np.zeros((n_all, m, n_out))
     start = (s * m + a) * n_out  # flat offset of each pair's first outcome
@@ -512,7 +509,7 @@ def from_matrices(
         reached by a terminated transition in Gymnasium or a POMDPs.jl terminal state).
         Either way its rows of ``P`` are discarded. ``"zero"`` needs listed states.
     """
-    discount = _check_discount(discount)
+    discount = check_discount(discount)
     sense = check_choice("sense", sense, ("max", "min"))
     terminal_reward = _check_terminal_reward(terminal_reward, terminal)
     mats = matrix_list(P, "P")
@@ -736,7 +733,7 @@ def from_quantecon(
     if Q is None and beta is None and _is_discrete_dp(R):
         ddp = R
         sa = getattr(ddp, "_sa_pair", getattr(ddp, "s_indices", None) is not None)
-        beta = _check_discount(ddp.beta)
+        beta = check_discount(ddp.beta)
         if sa:
             return _quantecon_sa(
                 cls, ddp.R, ddp.Q, beta, ddp.s_indices, ddp.a_indices, terminal,
@@ -750,7 +747,7 @@ def from_quantecon(
             "from_quantecon takes a DiscreteDP, or R, Q and beta (with s_indices and "
             "a_indices for the state-action-pair form)"
         )
-    beta = _check_discount(beta)
+    beta = check_discount(beta)
     if (s_indices is None) != (a_indices is None):
         raise ValidationError("s_indices and a_indices go together: pass both or neither")
     if s_indices is None:
@@ -946,7 +943,7 @@ def from_transitions(
         POMDPs.jl's terminal states). Either way its rows are discarded. ``"zero"`` needs
         listed states.
     """
-    discount = _check_discount(discount)
+    discount = check_discount(discount)
     sense = check_choice("sense", sense, ("max", "min"))
     terminal_reward = _check_terminal_reward(terminal_reward, terminal)
     tr = check_array("rows", rows, nonempty=True)

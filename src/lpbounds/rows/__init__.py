@@ -62,9 +62,9 @@ patrol partitions satisfy the rule by construction (the allowed actions are a fu
 of the partition key, :mod:`lpbounds.patrol.bounds`). The max-rows of RLP (eq. 9) need
 no such rule: a disallowed pair simply has no row, and every row that exists is implied
 at ``Phi v`` by a Bellman inequality of an allowed pair (Theorem 1).
-The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels` (compiled, for large
-systems) and :mod:`lpbounds._npkernels` (their numpy twins, same numbers, for small ones);
-:mod:`lpbounds._backend` picks one by size.
+The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels.compiled` (compiled, for large
+systems) and :mod:`lpbounds._kernels.twins` (their numpy twins, same numbers, for small ones);
+:mod:`lpbounds._kernels.dispatch` picks one by size.
 
 **The sweep protocol.** The exact-DP loops of :mod:`lpbounds.dp` (MPI, value iteration,
 iterative policy evaluation) run on any :class:`SweepOperator`: :class:`BellmanRows`,
@@ -85,14 +85,15 @@ from typing import Any, ClassVar, Literal, Protocol, runtime_checkable
 import numpy as np
 import scipy.sparse as sp
 
-from . import _backend
-from .errors import ValidationError
-from .mdp import FiniteMDP, index_dtype
-from .partition import Partition
-from .stochastic import RowSums, check_rows, row_sums
-from .validation import (
+from .._kernels import dispatch as _backend
+from ..errors import ValidationError
+from ..model.mdp import FiniteMDP, index_dtype
+from ..model.partition import Partition
+from ..stochastic import RowSums, check_rows, row_sums
+from ..validation import (
     as_float_array,
     check_array,
+    check_discount,
     check_indices,
     check_int,
     check_value_scale,
@@ -258,7 +259,7 @@ class BellmanRows:
         action = check_array("action", action, integer=True)
         if reward.shape != (n_rows,) or action.shape != (n_rows,):
             raise ValidationError("owner, action and reward must have the same length")
-        lam = FiniteMDP._check_discount(discount)
+        lam = check_discount(discount)  # FiniteMDP's rule (lpbounds.validation)
         check_indices("owner", owner, n_vars)
         check_indices("targets", targets, n_vars)
         check_indices("action", action, np.iinfo(np.int32).max)
@@ -465,7 +466,7 @@ class BellmanRows:
     @property
     def reads(self) -> int:
         """Values a sweep reads, ``R * L``: small systems run on the numpy kernels
-        (:mod:`lpbounds._backend`)."""
+        (:mod:`lpbounds._kernels.dispatch`)."""
         return self.n_rows * self.n_outcomes
 
     @property
@@ -478,13 +479,30 @@ class BellmanRows:
         """Values a sweep reads (:class:`SweepOperator`): :attr:`reads`."""
         return self.reads
 
-    def _k(self) -> Any:
-        """The kernel module of this system's size (numpy twins or compiled)."""
+    def kernels(self) -> Any:
+        """The kernel module of this system's size (numpy twins or compiled).
+
+        Returns
+        -------
+        module
+            :mod:`lpbounds._kernels.twins` or the compiled kernels, as
+            :func:`lpbounds._kernels.dispatch.sweep_kernels` picks them.
+        """
         return _backend.sweep_kernels(self.reads)
 
-    def _chunks(self, nchunks: int | None = None) -> int:
-        """Work chunks for the compiled kernels: ``nchunks``, else a few per numba thread
-        (1 for the numpy twins, which ignore it)."""
+    def work_chunks(self, nchunks: int | None = None) -> int:
+        """Work chunks for the compiled kernels.
+
+        Parameters
+        ----------
+        nchunks : int, optional
+            Returned as is when given.
+
+        Returns
+        -------
+        int
+            ``nchunks``, else a few per numba thread (1 for the numpy twins, which ignore it).
+        """
         if nchunks is not None:
             return nchunks
         return _nchunks() if self.compiled else 1
@@ -502,36 +520,58 @@ class BellmanRows:
         of these rows is ``row_sums().modulus(discount)``."""
         return row_sums(self.probs)
 
-    def _vec(self, v: Any, name: str = "v") -> np.ndarray:
-        """``v`` as a float64 vector of length ``n_vars`` (dtype checked before the cast;
-        finiteness is the caller's check, done once at its boundary)."""
+    def as_vector(self, v: Any, name: str = "v") -> np.ndarray:
+        """``v`` as a float64 vector of length ``n_vars``.
+
+        The dtype and length are checked before the cast; finiteness is the caller's check,
+        done once at its boundary.
+
+        Parameters
+        ----------
+        v : array_like
+            The vector.
+        name : str
+            Its name in error messages.
+
+        Returns
+        -------
+        numpy.ndarray
+            float64, shape ``(n_vars,)``.
+
+        Raises
+        ------
+        ValidationError
+            On a wrong dtype or length.
+        """
         return check_vector(name, v, self.n_vars, finite=False)
 
     def q_values(self, v: Any) -> np.ndarray:
         """``q_r(v) = reward_r + discount * sum_l probs_{r,l} v(targets_{r,l})`` per row."""
         out = np.empty(self.n_rows)
-        self._k().q_values(self.reward, self.targets, self.probs, self.discount, self._vec(v), out)
+        self.kernels().q_values(
+            self.reward, self.targets, self.probs, self.discount, self.as_vector(v), out
+        )
         return out
 
     def apply_max(self, v: Any) -> tuple[np.ndarray, np.ndarray]:
         """``(Tv)(i) = max_{r of i} q_r(v)`` and the first maximising row of each owner."""
         out = np.empty(self.n_vars)
         arg = np.empty(self.n_vars, dtype=np.int64)
-        self.sweep_max(self._vec(v), out, arg)
+        self.sweep_max(self.as_vector(v), out, arg)
         return out, arg
 
     def apply_maxmin(self, v: Any) -> tuple[np.ndarray, np.ndarray]:
         """``(Gv)(i) = max_u min_{r in (i, u)} q_r(v)`` and the minimising row of the best ``u``."""
         out = np.empty(self.n_vars)
         arg = np.empty(self.n_vars, dtype=np.int64)
-        self._k().bellman_maxmin(
+        self.kernels().bellman_maxmin(
             self.indptr,
             self.action,
             self.reward,
             self.targets,
             self.probs,
             self.discount,
-            self._vec(v),
+            self.as_vector(v),
             out,
             arg,
         )
@@ -563,9 +603,9 @@ class BellmanRows:
     ) -> tuple[float, float]:
         """``out = T v``, the first maximising row of each owner in ``arg``; returns the
         min and max of ``out - v`` (``work`` is unused)."""
-        lo, hi = self._k().bellman_max_stats(
+        lo, hi = self.kernels().bellman_max_stats(
             self.indptr, self.reward, self.targets, self.probs, self.discount, v, out, arg,
-            self._chunks(nchunks),
+            self.work_chunks(nchunks),
         )  # fmt: skip
         return float(lo), float(hi)
 
@@ -582,8 +622,8 @@ class BellmanRows:
         """``out[i] = q_{sel[i]}(v)``; returns the min and max of ``out - v``. ``reward``
         replaces the rows' rewards (:meth:`zero_rewards`: ``discount * P_pi v``)."""
         rew = self.reward if reward is None else reward
-        lo, hi = self._k().policy_sweep_stats(
-            sel, rew, self.targets, self.probs, self.discount, v, out, self._chunks(nchunks)
+        lo, hi = self.kernels().policy_sweep_stats(
+            sel, rew, self.targets, self.probs, self.discount, v, out, self.work_chunks(nchunks)
         )
         return float(lo), float(hi)
 
@@ -604,7 +644,7 @@ class BellmanRows:
     def sweep_maxmin(self, v: np.ndarray, out: np.ndarray, arg: np.ndarray) -> tuple[float, float]:
         """``out = G v`` (the game operator of :meth:`apply_maxmin`), the minimising row of
         the best action in ``arg``; returns the min and max of ``out - v``."""
-        self._k().bellman_maxmin(
+        self.kernels().bellman_maxmin(
             self.indptr,
             self.action,
             self.reward,
@@ -618,30 +658,15 @@ class BellmanRows:
         d = out - v
         return float(d.min()), float(d.max())
 
-    # the pre-protocol private names, for tests/test_fast_paths.py, which still calls them
-    # (nothing in src does): remove once it uses the public methods
-    def _sweep_policy(
-        self,
-        sel: np.ndarray,
-        v: np.ndarray,
-        out: np.ndarray,
-        nchunks: int,
-        reward: np.ndarray | None = None,
-    ) -> tuple[float, float]:
-        return self.sweep_policy(sel, v, out, nchunks=nchunks, reward=reward)
-
-    def _evaluator(self, nchunks: int) -> PolicySweeps:
-        return PackedSweeps(self, nchunks=nchunks)
-
     def evaluate_rows(self, rows: np.ndarray, v: Any) -> np.ndarray:
         """One policy-evaluation sweep: ``out[i] = q_{rows[i]}(v)``."""
         out = np.empty(self.n_vars)
-        self.sweep_policy(np.ascontiguousarray(rows, dtype=np.int64), self._vec(v), out)
+        self.sweep_policy(np.ascontiguousarray(rows, dtype=np.int64), self.as_vector(v), out)
         return out
 
     def violation(self, v: Any) -> float:
         """``max_r (q_r(v) - v(owner_r))_+``: how far ``v`` is from satisfying every row."""
-        vv = self._vec(v)
+        vv = self.as_vector(v)
         return float(max(0.0, (self.q_values(vv) - vv[self.owner]).max()))
 
     # ------------------------------------------------------------------ LP data
@@ -760,7 +785,7 @@ class PackedSweeps(PolicySweeps):
     def set_policy(self, arg: np.ndarray) -> None:
         """Gather the rows ``arg`` (one per owner) into the packed arrays."""
         rows = self.rows
-        rows._k().gather_rows(
+        rows.kernels().gather_rows(
             arg, rows.reward, rows.targets, rows.probs, self.reward, self.targets,
             self._probs_out, not self.shared,
         )  # fmt: skip
@@ -768,9 +793,9 @@ class PackedSweeps(PolicySweeps):
     def sweep(self, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:
         """``out = T_pi v`` on the packed rows; returns the min and max of ``out - v``."""
         rows = self.rows
-        lo, hi = rows._k().policy_sweep_stats(
+        lo, hi = rows.kernels().policy_sweep_stats(
             self.index, self.reward, self.targets, self.probs, rows.discount, v, out,
-            rows._chunks(self.nchunks),
+            rows.work_chunks(self.nchunks),
         )  # fmt: skip
         return float(lo), float(hi)
 
@@ -877,7 +902,7 @@ class PostDecisionRows:
     @property
     def reads(self) -> int:
         """Pairs times outcomes, the reads of the plain rows' sweep: the size that picks the
-        kernels (:mod:`lpbounds._backend`), so a model takes the same path either way."""
+        kernels (:mod:`lpbounds._kernels.dispatch`), so a model takes the same path either way."""
         return int(self.first.size * self.outcomes.shape[1])
 
     @property
@@ -891,12 +916,29 @@ class PostDecisionRows:
         one ``W`` per pair."""
         return self.n_post * int(self.outcomes.shape[1]) + int(self.first.size)
 
-    def _k(self) -> Any:
+    def kernels(self) -> Any:
+        """The post-decision kernel module of this system's size (numpy twins or compiled).
+
+        Returns
+        -------
+        module
+            As :func:`lpbounds._kernels.dispatch.sweep_kernels` picks it.
+        """
         return _backend.sweep_kernels(self.reads, "post-decision")
 
-    def _chunks(self, nchunks: int | None = None) -> int:
-        """Work chunks for the compiled kernels: ``nchunks``, else a few per numba thread
-        (1 for the numpy twins, which ignore it)."""
+    def work_chunks(self, nchunks: int | None = None) -> int:
+        """Work chunks for the compiled kernels.
+
+        Parameters
+        ----------
+        nchunks : int, optional
+            Returned as is when given.
+
+        Returns
+        -------
+        int
+            ``nchunks``, else a few per numba thread (1 for the numpy twins, which ignore it).
+        """
         if nchunks is not None:
             return nchunks
         return _nchunks() if self.compiled else 1
@@ -941,8 +983,8 @@ class PostDecisionRows:
         """``out = T v``, the first maximising action in ``arg`` (int8); returns the min and
         max of ``out - v``. ``work``: a :meth:`new_work` buffer (else one is made)."""
         w = self.new_work() if work is None else work
-        nc = self._chunks(nchunks)
-        kern = self._k()
+        nc = self.work_chunks(nchunks)
+        kern = self.kernels()
         kern.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
             lo, hi = kern.ps_max_stats_coded(
@@ -967,8 +1009,8 @@ class PostDecisionRows:
         ``out - v``. ``reward`` replaces the stored rewards (the table when they are coded:
         see :meth:`zero_rewards`); ``work`` as in :meth:`sweep_max`."""
         w = self.new_work() if work is None else work
-        nc = self._chunks(nchunks)
-        kern = self._k()
+        nc = self.work_chunks(nchunks)
+        kern = self.kernels()
         kern.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
             table = self.reward_table if reward is None else reward
@@ -979,30 +1021,6 @@ class PostDecisionRows:
             rew = self.reward if reward is None else reward
             lo, hi = kern.ps_policy_stats(self.first, rew, sel, w, self.discount, v, out, nc)
         return float(lo), float(hi)
-
-    # the pre-protocol private names, for tests/test_fast_paths.py and
-    # benchmarks/bench_dp.py, which still call them (nothing in src does): remove once they
-    # use the public methods
-    def _sweep_max(
-        self,
-        v: np.ndarray,
-        out: np.ndarray,
-        arg: np.ndarray,
-        nchunks: int,
-        w: np.ndarray | None = None,
-    ) -> tuple[float, float]:
-        return self.sweep_max(v, out, arg, work=w, nchunks=nchunks)
-
-    def _sweep_policy(
-        self,
-        act: np.ndarray,
-        v: np.ndarray,
-        out: np.ndarray,
-        nchunks: int,
-        w: np.ndarray | None = None,
-        reward: np.ndarray | None = None,
-    ) -> tuple[float, float]:
-        return self.sweep_policy(act, v, out, work=w, nchunks=nchunks, reward=reward)
 
     def zero_rewards(self) -> np.ndarray:
         """Zeros in the layout :meth:`sweep_policy` reads (the code table when the rewards
@@ -1023,7 +1041,7 @@ class PostDecisionRows:
         row_start = np.zeros(self.n_vars, dtype=np.int64)
         np.cumsum(counts[:-1], out=row_start[1:])
         out = np.empty(self.n_vars, dtype=np.int64)
-        self._k().ps_rows(self.allowed, row_start, np.asarray(act), out)
+        self.kernels().ps_rows(self.allowed, row_start, np.asarray(act), out)
         return out
 
 
@@ -1048,7 +1066,7 @@ def _reward_codes(
     kern: Any, reward: np.ndarray, max_codes: int
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """``(codes, table)`` with ``table[codes] == reward`` bit for bit, or ``(None, None)``;
-    ``kern`` is the kernel module (:mod:`lpbounds._backend`)."""
+    ``kern`` is the kernel module (:mod:`lpbounds._kernels.dispatch`)."""
     if max_codes < 1 or reward.size == 0:
         return None, None
     rew = np.ascontiguousarray(reward, dtype=np.float64)

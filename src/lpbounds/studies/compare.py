@@ -11,9 +11,9 @@ A study is the cross product of
 * solver configurations: a cvxpy solver name with a named option set, written
   ``SOLVER`` (all option sets of that solver) or ``SOLVER:SET``, e.g. ``HIGHS:ipm``.
   By default every LP-capable solver cvxpy finds installed, read from cvxpy's solver
-  classes (:func:`lpbounds.solver_catalog.lp_capable_solvers`), each with its backend
+  classes (:func:`lpbounds.formulations.solvers.lp_capable_solvers`), each with its backend
   named (``SCIPY`` is HiGHS inside scipy) and its option sets
-  (:data:`~lpbounds.solver_catalog.OPTION_SETS`: HiGHS ``simplex``, ``ipm``, ``ipm-nox``,
+  (:data:`~lpbounds.formulations.solvers.OPTION_SETS`: HiGHS ``simplex``, ``ipm``, ``ipm-nox``,
   ``pdlp``; Clarabel ``default`` and ``tight``; others ``default``). Missing solvers are
   skipped with a note.
 
@@ -22,7 +22,7 @@ every time) with ``raise_on_failure=False``, and gives one row of a
 :class:`pandas.DataFrame` (see :data:`COLUMNS`): status (:class:`lpbounds.status.Status`),
 objective, the **certified error** of the returned point (``certified_error``: a bound
 on ``max |values - exact optimum|`` from the contraction certificate of
-:mod:`lpbounds.certificate`, computed from the point alone, the same for every solver:
+:mod:`lpbounds.certification.certificate`, computed from the point alone, the same for every solver:
 the fair accuracy measure), the maximum deviation from the formulation's exact,
 solver-free counterpart (``fixed_point``; for ELP the exact DP's ``V*``), the primal
 residual, compile and solve times, and iterations. A row is ``accurate`` when its
@@ -36,7 +36,7 @@ with its point and certified error kept. An "infeasible" answer (the LPs are fea
 construction) gets a note with the exact fixed point's row violation.
 
 What a study writes (per-solver counts, shifted geometric means, performance profiles,
-metadata) is in :mod:`lpbounds.study_report`.
+metadata) is in :mod:`lpbounds.studies.report`.
 
 Bad input fails before anything is solved (:class:`~lpbounds.errors.ValidationError`):
 an instance file that does not exist, a solver name no one knows (a known solver that
@@ -65,10 +65,10 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from ._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES
-from .checks import lp_bracket
-from .errors import LPBoundsError, SolverNotInstalledError, ValidationError
-from .solver_catalog import (
+from .._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES
+from ..certification.checks import lp_bracket
+from ..errors import LPBoundsError, SolverNotInstalledError, ValidationError
+from ..formulations.solvers import (
     backend,
     highs_algorithms,
     known_option_sets,
@@ -76,8 +76,9 @@ from .solver_catalog import (
     option_sets,
     with_time_limit,
 )
-from .status import POINT_STATUSES, Status
-from .study_report import (
+from ..status import POINT_STATUSES, Status
+from ..tolerances import LP_CERT_RTOL, LP_COMPARE_RTOL, dp_scale
+from .report import (
     DEFAULT_SHIFTS,
     plot_study,
     save_study,
@@ -85,12 +86,11 @@ from .study_report import (
     study_metadata,
     summarize,
 )
-from .tolerances import LP_CERT_RTOL, LP_COMPARE_RTOL, dp_scale
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-    from .formulations.base import Formulation
+    from ..formulations.base import Formulation
 
 __all__ = [
     "COLUMNS",
@@ -181,7 +181,7 @@ class SolverConfig:
 
 def _missing_note(installed: Sequence[str]) -> str | None:
     """The known solvers that are not installed (licensed ones left out), with install lines."""
-    from .formulations.base import INSTALL_HINTS
+    from ..formulations.base import INSTALL_HINTS
 
     missing = [
         s
@@ -220,7 +220,7 @@ def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfi
     names : iterable of str, optional
         ``"HIGHS"`` (every HiGHS option set), ``"HIGHS:ipm"`` (one set), ``"CLARABEL"``,
         ... (case-insensitive). Default: every LP-capable solver cvxpy finds installed
-        (:func:`lpbounds.solver_catalog.lp_capable_solvers`: read from cvxpy's solver
+        (:func:`lpbounds.formulations.solvers.lp_capable_solvers`: read from cvxpy's solver
         classes), every option set of each.
 
     Returns
@@ -236,7 +236,7 @@ def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfi
     ValidationError
         For a solver name that no one knows or an unknown option set (typos).
     """
-    from .formulations.base import INSTALL_HINTS, resolve_solver
+    from ..formulations.base import INSTALL_HINTS, resolve_solver
 
     notes: list[str] = []
     if names is None:
@@ -309,7 +309,7 @@ class Case:
 
     def params(self) -> Any:
         """The patrol parameters of a ``kind = "patrol"`` instance."""
-        from .patrol.params import PatrolParams
+        from ..patrol.params import PatrolParams
 
         table = {k: v for k, v in self.instance.config["model"].items() if k != "kind"}
         return PatrolParams.from_table(table)
@@ -334,8 +334,8 @@ def parse_instance(spec: str) -> tuple[str, dict[str, int] | None]:
 @lru_cache(maxsize=8)
 def load_case(spec: str) -> Case:
     """Load (and cache in this process) the instance ``spec``."""
-    from .generators import garnet, random_partition
-    from .instances import load_instance
+    from ..model.generators import garnet, random_partition
+    from ..model.instances import load_instance
 
     name, g = parse_instance(spec)
     if g is not None:
@@ -365,7 +365,7 @@ class FormulationSpec:
 
 def _rows_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
     """Fixed point of the max over the formulation's rows (Fact 1), with its error bound."""
-    from .dp import solve_exact
+    from ..dp import solve_exact
 
     res = solve_exact(form.rows)
     return res.values, float(res.error_bound)
@@ -385,34 +385,34 @@ def _need_mdp(case: Case, what: str) -> None:
 
 
 def _build_elp(case: Case) -> Any:
-    from .formulations.elp import ELP
+    from ..formulations.elp import ELP
 
     return ELP(case.mdp)
 
 
 def _build_rlp(case: Case) -> Any:
-    from .formulations.rlp import RLP
+    from ..formulations.rlp import RLP
 
     _need_mdp(case, "RLP")
     return RLP(case.mdp, case.partition)
 
 
 def _build_slp(case: Case) -> Any:
-    from .formulations.slp import SLP
+    from ..formulations.slp import SLP
 
     _need_mdp(case, "SLP")
     return SLP(case.mdp, case.partition, mu="uniform")
 
 
 def _build_ib(case: Case) -> Any:
-    from .formulations.ib import IB
+    from ..formulations.ib import IB
 
     _need_mdp(case, "IB")
     return IB(case.mdp, case.partition, 2)
 
 
 def _build_alp(case: Case) -> Any:
-    from .formulations.alp import ALP
+    from ..formulations.alp import ALP
 
     _need_mdp(case, "ALP")
     return ALP(case.mdp, case.partition.basis)
@@ -420,8 +420,8 @@ def _build_alp(case: Case) -> Any:
 
 def _alp_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
     """With the hard basis Phi, ALP is RLP: its optimum is RLP's least feasible point."""
-    from .dp import solve_exact
-    from .rows import BellmanRows
+    from ..dp import solve_exact
+    from ..rows import BellmanRows
 
     res = solve_exact(BellmanRows.aggregate(case.mdp, case.partition, reduce="max"))
     return res.values, float(res.error_bound)
@@ -431,7 +431,7 @@ def _build_patrol(kind: str) -> Callable[[Case], Any]:
     name = "UBLP" if kind == "up" else "LBLP"
 
     def build(case: Case) -> Any:
-        from .patrol import bounds
+        from ..patrol import bounds
 
         if case.kind != "patrol":
             raise ValidationError(f"{name} applies to patrol instances only")
@@ -531,12 +531,13 @@ def _status(result: Any) -> str:
 
 def _certified_error(case: Case, formulation: str, form: Any, result: Any) -> tuple[float, float]:
     """``(certified error, scale)`` of the returned point: a bound on ``max |values - exact
-    optimum|`` (:func:`lpbounds.checks.lp_bracket`) and ``max|R| / (1 - lambda)`` of the
+    optimum|`` (:func:`lpbounds.certification.checks.lp_bracket`) and ``max|R| / (1 - lambda)`` of
+    the
     rows it was certified on. ALP with the hard basis is certified on RLP's rows (its
     optimum ``r`` is RLP's ``v*``)."""
     if formulation == "ALP":
-        from .certificate import certify
-        from .rows import BellmanRows
+        from ..certification.certificate import certify
+        from ..rows import BellmanRows
 
         rows = BellmanRows.aggregate(case.mdp, case.partition, reduce="max")
         err = float(certify(rows, np.asarray(result.values, dtype=np.float64)).error_bound)
@@ -708,7 +709,7 @@ class StudyResult:
 
     def solver_summary(self, shifts: Sequence[float] = DEFAULT_SHIFTS) -> pd.DataFrame:
         """Per solver configuration: counts and shifted geometric means of time
-        (:func:`lpbounds.study_report.solver_summary`)."""
+        (:func:`lpbounds.studies.report.solver_summary`)."""
         return solver_summary(self.frame, shifts, time_limit=self.params.get("time_limit"))
 
 
@@ -742,7 +743,7 @@ def run_study(
         (its status) and the threshold of the ``accurate`` column on ``certified_error``.
     time_limit : float, optional
         Seconds per solve, passed in each solver's own keyword
-        (:data:`lpbounds.solver_catalog.TIME_LIMIT_OPTIONS`; a solver without one runs
+        (:data:`lpbounds.formulations.solvers.TIME_LIMIT_OPTIONS`; a solver without one runs
         unlimited, with a note). A solve that used it up without an OPTIMAL point has
         status ``time_limit`` and keeps its point and certified error.
     jobs : int, optional
@@ -805,8 +806,8 @@ def _prepare_tasks(
     time_limit: float | None = None,
 ) -> tuple[list[Task], list[str]]:
     """The tasks of a study and its notes; every input error raised here, before a solve."""
-    from .instances import load_instance
-    from .validation import check_real
+    from ..model.instances import load_instance
+    from ..validation import check_real
 
     if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
         raise ValidationError(f"repeat must be an integer >= 1; got {repeat!r}")

@@ -5,8 +5,8 @@ Every kernel works on a row system in CSR form (see :mod:`lpbounds.rows`): rows 
 ``q_r = reward[r] + discount * sum_l probs[r, l] * v[targets[r, l]]``. ``probs`` may be
 a read-only broadcast view (stride 0) when all rows share one distribution.
 
-These are the fast paths for large models; :mod:`lpbounds._npkernels` has a numpy twin of
-each, with the same arithmetic, used below :data:`lpbounds._backend.SMALL_READS` reads per
+These are the fast paths for large models; :mod:`lpbounds._kernels.twins` has a numpy twin of
+each, with the same arithmetic, used below :data:`lpbounds._kernels.dispatch.SMALL_READS` reads per
 sweep; ``tests/test_fast_paths.py`` checks that both give the same numbers.
 """
 
@@ -409,7 +409,7 @@ def ps_policy_stats_coded(
 @njit(**_OPTS)
 def check_successors(succ, allow, n):  # pragma: no cover - compiled
     """Out-of-range successors of an MDP: (count on allowed pairs, first flat index, count
-    elsewhere), for :class:`lpbounds.mdp.FiniteMDP`.
+    elsewhere), for :class:`lpbounds.model.mdp.FiniteMDP`.
 
     One pass and no temporaries (full-size boolean masks cost GBs at 33 M states).
     """

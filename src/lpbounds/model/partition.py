@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import ValidationError
+from ..errors import ValidationError
+from ..validation import as_array, as_float_array, check_array, check_int
 from .mdp import index_dtype
-from .validation import as_array, as_float_array, check_array, check_int
 
 __all__ = ["Partition"]
 

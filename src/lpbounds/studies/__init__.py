@@ -1,0 +1,2 @@
+"""Layer 8, studies: solver comparisons and their reports, performance profiles,
+verification campaigns and LP export."""

@@ -1,0 +1,277 @@
+"""The house: the layer map of docs/architecture.md holds for every import in src.
+
+Every module's imports are parsed (module level and inside functions; imports under
+``if TYPE_CHECKING:`` are excluded, they never run). The tests fail on an import cycle,
+on an import from a higher layer into a lower one, on a module that belongs to no layer
+of the map, on a module that reaches another module's underscore names, and on a second
+module constructing ``highspy.Highs``.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
+PKG = SRC / "lpbounds"
+MAP = ROOT / "docs" / "architecture.md"
+
+
+def _modules() -> dict[str, Path]:
+    mods = {}
+    for f in PKG.rglob("*.py"):
+        rel = f.relative_to(SRC).with_suffix("")
+        parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
+        mods[".".join(parts)] = f
+    return mods
+
+
+MODULES = _modules()
+PACKAGES = {n for n, f in MODULES.items() if f.name == "__init__.py"}
+
+
+def _type_checking_nodes(tree: ast.AST) -> set[int]:
+    skip: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If):
+            t = node.test
+            if (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING") or (
+                isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING"
+            ):
+                for sub in node.body:
+                    skip.update(id(n) for n in ast.walk(sub))
+    return skip
+
+
+def _resolve(module: str, node: ast.ImportFrom) -> str:
+    if not node.level:
+        return node.module or ""
+    base = module if module in PACKAGES else module.rsplit(".", 1)[0]
+    parts = base.split(".")
+    base = ".".join(parts[: len(parts) - node.level + 1])
+    return f"{base}.{node.module}" if node.module else base
+
+
+def _owner(name: str) -> str | None:
+    """The module of lpbounds that ``name`` (a dotted import target) lives in."""
+    while name and name not in MODULES:
+        name = name.rsplit(".", 1)[0] if "." in name else ""
+    return name or None
+
+
+def imports() -> dict[str, set[str]]:
+    """module -> the lpbounds modules it imports (a package's own submodules included)."""
+    edges: dict[str, set[str]] = {m: set() for m in MODULES}
+    for module, path in MODULES.items():
+        tree = ast.parse(path.read_text(), str(path))
+        skip = _type_checking_nodes(tree)
+        for node in ast.walk(tree):
+            if id(node) in skip:
+                continue
+            targets: list[str] = []
+            if isinstance(node, ast.ImportFrom):
+                base = _resolve(module, node)
+                if base.split(".")[0] == "lpbounds":
+                    targets = [f"{base}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names if a.name.split(".")[0] == "lpbounds"]
+            for t in targets:
+                owner = _owner(t)
+                if owner and owner != module:
+                    edges[module].add(owner)
+    return edges
+
+
+def layer_map() -> list[tuple[int, str, list[str]]]:
+    """(number, name, module prefixes) per row of the table in docs/architecture.md."""
+    rows = []
+    for line in MAP.read_text().splitlines():
+        m = re.match(r"^\|\s*(\d+)\s*\|\s*([^|]+?)\s*\|([^|]*)\|", line)
+        if m:
+            prefixes = re.findall(r"`(lpbounds[\w.]*)`", m.group(3))
+            rows.append((int(m.group(1)), m.group(2), prefixes))
+    return rows
+
+
+def layer_of(module: str, rows: list[tuple[int, str, list[str]]]) -> int | None:
+    best, best_len = None, -1
+    for number, _, prefixes in rows:
+        for p in prefixes:
+            if (module == p or module.startswith(p + ".")) and len(p) > best_len:
+                best, best_len = number, len(p)
+    return best
+
+
+def test_the_map_has_layers_in_order():
+    rows = layer_map()
+    assert len(rows) >= 8, "docs/architecture.md lost its layer table"
+    assert [r[0] for r in rows] == sorted(r[0] for r in rows)
+    assert all(r[2] for r in rows), "a layer without modules"
+
+
+def test_every_module_is_in_a_layer():
+    rows = layer_map()
+    missing = sorted(m for m in MODULES if layer_of(m, rows) is None)
+    assert missing == []
+
+
+def test_no_import_runs_up_a_layer():
+    rows = layer_map()
+    up = []
+    for module, targets in imports().items():
+        mine = layer_of(module, rows)
+        for t in targets:
+            theirs = layer_of(t, rows)
+            if mine is not None and theirs is not None and theirs > mine:
+                up.append(f"{module} (layer {mine}) imports {t} (layer {theirs})")
+    assert up == []
+
+
+def _cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+    counter = [0]
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in edges[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_cycle():
+    # a package's __init__ re-exporting its own submodules is not a cycle: drop the edges
+    # from a package to the modules inside it
+    edges = {
+        m: {t for t in ts if not (m in PACKAGES and t.startswith(m + "."))}
+        for m, ts in imports().items()
+    }
+    assert _cycles(edges) == []
+
+
+def test_cycle_finder_finds_a_cycle():
+    """The check above could fail: a two-module cycle and a three-module one are found."""
+    edges = {"a": {"b"}, "b": {"a"}, "c": {"d"}, "d": {"e"}, "e": {"c"}, "f": {"a"}}
+    assert sorted(_cycles(edges)) == [["a", "b"], ["c", "d", "e"]]
+
+
+def _private_uses(module: str, path: Path) -> list[str]:
+    """Underscore names of other lpbounds modules imported or reached as attributes."""
+    tree = ast.parse(path.read_text(), str(path))
+    found = []
+    aliases: dict[str, str] = {}  # local name -> lpbounds module it names
+    external: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = _resolve(module, node)
+            if base.split(".")[0] != "lpbounds":
+                continue
+            for a in node.names:
+                full = f"{base}.{a.name}"
+                if full in MODULES:
+                    aliases[a.asname or a.name] = full
+                elif a.name.startswith("_") and not a.name.startswith("__"):
+                    if _owner(base) != module:
+                        found.append(f"{module}:{node.lineno} imports {base}.{a.name}")
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name in MODULES and a.asname:
+                    aliases[a.asname] = a.name
+                elif a.name.split(".")[0] != "lpbounds":
+                    # a module of the standard library or a dependency: its underscore
+                    # names used as documented API (argparse._SubParsersAction in
+                    # annotations) are not lpbounds' private state
+                    external.add(a.asname or a.name.split(".")[0])
+    for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Attribute)
+            and node.attr.startswith("_")
+            and not node.attr.startswith("__")
+        ):
+            v = node.value
+            if isinstance(v, ast.Name) and v.id in aliases and aliases[v.id] != module:
+                found.append(f"{module}:{node.lineno} {v.id}.{node.attr}")
+            elif not (isinstance(v, ast.Name) and v.id in ("self", "cls")) and not (
+                isinstance(v, ast.Call) and isinstance(v.func, ast.Name) and v.func.id == "super"
+            ):
+                if node.attr in _ALLOWED_ATTRS or (isinstance(v, ast.Name) and v.id in external):
+                    continue
+                if (module, node.attr) in _ALLOWED_PLACES:
+                    continue
+                if isinstance(v, ast.Name) and v.id in aliases:
+                    continue
+                found.append(f"{module}:{node.lineno} .{node.attr}")
+    return found
+
+
+#: underscore attributes that are documented API of the standard library or a dependency
+_ALLOWED_ATTRS = frozenset({"_replace", "_asdict", "_fields", "_make", "_exit", "_getframe"})
+
+#: (module, attribute) of a dependency's internals read on purpose, each in one function:
+#: numba has no public API for where a dispatcher's on-disk cache index lives, which
+#: ``lpbounds._kernels.dispatch._numba_cache_index_path`` reads to tell a warm cache from a
+#: cold one (it returns None, "assume a compile", on a numba that lays it out otherwise)
+_ALLOWED_PLACES = frozenset(
+    {
+        ("lpbounds._kernels.dispatch", "_cache"),
+        ("lpbounds._kernels.dispatch", "_cache_file"),
+        ("lpbounds._kernels.dispatch", "_index_path"),
+    }
+)
+
+
+def test_no_private_access_across_modules():
+    found = []
+    for module, path in sorted(MODULES.items()):
+        found += _private_uses(module, path)
+    assert found == []
+
+
+def test_private_scan_finds_private_access(tmp_path):
+    """The scan above could fail: it sees an imported private name and a private attribute."""
+    bad = tmp_path / "bad.py"
+    bad.write_text(
+        "from lpbounds.model.mdp import _private\n"
+        "def f(rows):\n"
+        "    return rows._vec(1)\n"
+    )
+    assert len(_private_uses("lpbounds.bad", bad)) == 2
+
+
+def test_one_module_constructs_highs():
+    makers = []
+    for module, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr == "Highs":
+                v = node.value
+                if isinstance(v, ast.Name) and v.id in ("highspy", "_highspy"):
+                    makers.append(module)
+                    break
+    assert makers == ["lpbounds.formulations.highs"]
