@@ -1,7 +1,7 @@
 """No third-party banner or log line on stdout or stderr unless ``--verbose``.
 
 HiGHS prints "Running HiGHS ... Copyright ..." once per process, at the first
-``highspy.Highs()``, whatever its options say (lpbounds._quiet). Each command therefore
+``highspy.Highs()``, whatever its options say (lpbounds.formulations.highs). Each command therefore
 runs in a fresh process here, on the small models, as a user would run it; compare runs
 with two worker processes so the workers' output is covered too. ``--verbose`` shows
 the banner again, which proves the patterns below would see it.
@@ -140,7 +140,8 @@ def test_the_library_configures_no_logging():
 
 def test_a_users_own_cvxpy_solve_and_the_nlp_milp_print_no_banner():
     """The models lpbounds builds are cvxpy problems users solve themselves; the banner
-    is taken when the formulations are imported, so those solves are quiet too."""
+    is taken when lpbounds builds its first model (a Formulation or an NLP), so those
+    solves are quiet too."""
     code = (
         "import lpbounds as lb\n"
         "from lpbounds.formulations import NLP, RLP\n"

@@ -19,15 +19,15 @@ from hypothesis import strategies as st
 
 from lpbounds.errors import ConvergenceError, SolverNotInstalledError, ValidationError
 from lpbounds.formulations import NLP
-from lpbounds.formulations.nlp_cuts import (
+from lpbounds.formulations.nlp.cuts import (
     CutGeneratingLP,
     NLPMaster,
     cglp_data,
     highs_solve,
     master_data,
 )
-from lpbounds.generators import garnet, random_partition
-from lpbounds.partition import Partition
+from lpbounds.model.generators import garnet, random_partition
+from lpbounds.model.partition import Partition
 from lpbounds.status import Status
 
 from .. import _independent as ind

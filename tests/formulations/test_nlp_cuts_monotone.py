@@ -18,10 +18,10 @@ from hypothesis import strategies as st
 
 from lpbounds import FiniteMDP
 from lpbounds.formulations import NLP
-from lpbounds.formulations.nlp_cuts import highs_solve
-from lpbounds.formulations.nlp_monotone import MonotoneMaster, monotone_cuts
-from lpbounds.generators import garnet, random_partition
-from lpbounds.partition import Partition
+from lpbounds.formulations.nlp.cuts import highs_solve
+from lpbounds.formulations.nlp.monotone import MonotoneMaster, monotone_cuts
+from lpbounds.model.generators import garnet, random_partition
+from lpbounds.model.partition import Partition
 from lpbounds.status import Status
 
 from .. import _independent as ind

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from lpbounds import BellmanRows, FiniteMDP
 from lpbounds.errors import ValidationError
 from lpbounds.formulations import NLP
-from lpbounds.partition import Partition
+from lpbounds.model.partition import Partition
 from lpbounds.status import Status
 
 from .. import _independent as ind

@@ -14,8 +14,8 @@ import pytest
 
 import lpbounds as lb
 from lpbounds.formulations import NLP, NLPMILP
-from lpbounds.formulations.nlp_cuts import NLPMaster
-from lpbounds.partition import Partition
+from lpbounds.formulations.nlp.cuts import NLPMaster
+from lpbounds.model.partition import Partition
 
 from .test_nlp import check_result, reference_w
 from .test_nlp_masks import two_state_mdp

@@ -162,7 +162,7 @@ def configure_output(quiet: bool = False, verbose: bool = False) -> Iterator[Non
 
     Only the ``lpbounds`` logger is configured, never the root logger.
     """
-    from .._quiet import show_solver_output
+    from ..formulations.quiet import show_solver_output
 
     log = logging.getLogger("lpbounds")
     saved = (log.level, log.propagate, console.quiet, err_console.quiet)

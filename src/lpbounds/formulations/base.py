@@ -12,7 +12,7 @@ the duals ``y`` of a result are the variables and the groups' duals stacked in t
 order. :meth:`Formulation.solve` returns an :class:`LPResult` whose every number lpbounds
 computes itself from the returned point:
 
-* the **certificate** (:mod:`lpbounds.certificate`): for an LP of Bellman rows (ELP,
+* the **certificate** (:mod:`lpbounds.certification.certificate`): for an LP of Bellman rows (ELP,
   RLP, SLP, IB, UBLP, LBLP) a bracket ``lower_values <= exact optimum <= upper_values``
   that holds in floating point, whatever the solver claimed, and the bracket on the
   exact optimal objective; the **status** is decided from it
@@ -52,20 +52,29 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from .._quiet import silence_highs_banner, solver_output
-from ..certificate import Certificate, contraction_modulus, dual_objective_bound
+from ..certification.certificate import Certificate, contraction_modulus, dual_objective_bound
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
 from ..status import Status
 from ..tolerances import LP_CERT_RTOL, LP_DATA_BAND, LP_OBJECTIVE_MAX, LP_VALUE_SCALE_MAX
 from ..validation import as_float_array, check_bool, check_int, check_real
-from ._highs import STATUS_MAP as HIGHS_STATUS
-from ._highs import CvxpyHighs, pass_lp, quiet_highs, run_highs, set_options
+from .highs import (
+    CvxpyHighs,
+    pass_lp,
+    quiet_highs,
+    run_highs,
+    set_basis,
+    set_options,
+    silence_highs_banner,
+    solver_output,
+    status_of,
+)
+from .results import LPResult
 
-# HiGHS prints its banner on stdout at the first Highs() of a process, whatever the options
-# (cvxpy passes log_to_console=verbose only afterwards). Take that first construction here,
-# 3 ms (cvxpy imported highspy already), so the banner goes to the lpbounds log: no solve of
-# a model built here prints it, not even a user's own problem.solve(solver="HIGHS").
-silence_highs_banner()
+# HiGHS prints its banner on stdout the first time a process constructs a Highs object,
+# whatever the options (cvxpy passes log_to_console=verbose only afterwards). Nothing
+# happens at import: Formulation.__init__ takes that first construction
+# (silence_highs_banner, 3 ms, once per process), so the banner goes to the lpbounds log
+# and no solve of a model built here prints it, not even a user's own problem.solve(solver="HIGHS").
 
 __all__ = [
     "BACKENDS",
@@ -111,9 +120,9 @@ def installed_lp_solvers() -> list[str]:
     """The LP-capable cvxpy solvers installed here, HiGHS and Clarabel first.
 
     Read from cvxpy's solver classes at run time
-    (:func:`lpbounds.solver_catalog.lp_capable_solvers`), not from a hand-kept list.
+    (:func:`lpbounds.formulations.solvers.lp_capable_solvers`), not from a hand-kept list.
     """
-    from ..solver_catalog import lp_capable_solvers
+    from .solvers import lp_capable_solvers
 
     return list(lp_capable_solvers())
 
@@ -170,129 +179,6 @@ def check_cost(cost: Any, n: int, what: str = "cost") -> np.ndarray:
         i = int(np.flatnonzero(c < 0)[0])
         raise ValidationError(f"{what}[{i}] = {c[i]} is negative; costs must be >= 0")
     return c
-
-
-@dataclass
-class LPResult:
-    """The result of solving a formulation (one type for every formulation).
-
-    Attributes
-    ----------
-    formulation : str
-        "ELP", "RLP", "SLP", "IB", "LLP", "ALP", "UBLP", "LBLP", ...
-    status : Status
-        Decided from the certificate (see the module docstring), not the solver's claim.
-    objective : float
-        ``c'x`` at the returned point (computed by lpbounds).
-    x : ndarray
-        The full primal vector of the LP.
-    values : ndarray
-        The value variables: per state for ELP, per partition for RLP/SLP/UBLP/LBLP,
-        ``v_1`` for IB (all blocks in ``extra["blocks"]``), the weights ``r`` for ALP.
-    state_values : ndarray or None
-        ``Phi v`` per state, where the formulation has a state space.
-    lower_values, upper_values : ndarray or None
-        The certified bracket, valid in floating point. For a Bellman-row LP: on the LP's
-        exact optimum, entry by entry like ``values`` (RLP/UBLP: ``partition.lift(
-        upper_values) >= V*``; ELP: ``lower_values <= V* <= upper_values``; LBLP:
-        ``lower_values(i) <= min_{x in S_i} V*(x)``). For ALP (no solver-free optimum): per
-        state, on ``V*`` itself (``upper_values = Phi r + max(0, max(T Phi r - Phi r)) /
-        (1 - lambda)``, rounded up). For LLP: on RLP's ``v*``. ``None`` when the formulation
-        has no certificate (the cutting-plane loop's internal LPs).
-    error_bound : float
-        ``max |values - exact optimum|`` bound from the certificate (``inf`` without one).
-    objective_bracket : tuple of float or None
-        Certified ``[lo, hi]`` containing the LP's exact optimal objective (Bellman-row LPs).
-    certificate : Certificate or None
-        The full certificate (residuals, rounding margin, contraction modulus).
-    duals : ndarray
-        ``y >= 0``, one per row of ``A x >= b`` (the groups' duals stacked in row order).
-    group_duals : dict of str to ndarray
-        The same duals per named constraint group (``group_duals["bellman"]``, ...; the
-        groups of :attr:`Formulation.constraints`).
-    mu : ndarray or None
-        Duals spread over (state, action) pairs (shape (n, A)): the paper's ``mu``.
-    solver : str
-    solver_options : dict
-    compile_seconds, solve_seconds : float
-        cvxpy's compilation time and the solver's own time.
-    iterations : int or None
-    primal_residual : float
-        ``max (b - A x)^+``, computed here.
-    residual_tol : float
-        The absolute threshold the status was decided with: ``accuracy * max|R|`` on the
-        certificate's Bellman residual (``accuracy * max|b|`` on ``primal_residual`` for
-        an LP without a certificate).
-    accuracy : float
-        The requested relative accuracy.
-    dual_residual : float
-        ``||A'y - c||_inf``.
-    gap : float
-        ``|c'x - b'y|``.
-    extra : dict
-        Formulation-specific data (e.g. IB's blocks); ``extra["message"]`` on failure;
-        ``extra["solver_claim"]`` ("infeasible" or "unbounded") where the solver claimed
-        what the formulation's structure excludes; ``extra["lp_scaling"]`` (``{"b": kb,
-        "c": kc}``) where the solver saw ``b 2**-kb`` and ``c 2**-kc``.
-    modified : bool
-        True for a solve with ``extra_constraints``: then ``lower_values``/``upper_values``
-        and ``certificate`` are about the ORIGINAL problem's optimum (still valid, see
-        :meth:`Formulation.solve`), ``error_bound`` is ``inf`` and ``objective_bracket`` is
-        ``(certified lower bound, inf)``.
-    extra_residuals : tuple of float
-        Per extra constraint, its largest violation at the returned point (cvxpy's
-        ``violation()``, computed from the point).
-    extra_duals : tuple of ndarray
-        Per extra constraint, its dual (cvxpy's sign: ``>= 0`` for ``<=``/``>=``, free for
-        ``==``).
-    kkt_gap : float
-        Modified solves only: the duality gap of the modified LP from all the duals,
-        ``|c'x - D| + ||r||_1 max|x|`` (``D`` the Lagrangian dual value, ``r`` the
-        stationarity residual; see :meth:`Formulation.solve`); ``nan`` otherwise.
-    """
-
-    formulation: str
-    status: Status
-    objective: float
-    x: np.ndarray
-    values: np.ndarray
-    state_values: np.ndarray | None
-    duals: np.ndarray
-    mu: np.ndarray | None
-    solver: str
-    solver_options: dict[str, Any]
-    compile_seconds: float
-    solve_seconds: float
-    iterations: int | None
-    primal_residual: float
-    residual_tol: float
-    dual_residual: float
-    gap: float
-    lower_values: np.ndarray | None = None
-    upper_values: np.ndarray | None = None
-    error_bound: float = float("inf")
-    objective_bracket: tuple[float, float] | None = None
-    certificate: Certificate | None = None
-    accuracy: float = LP_CERT_RTOL
-    extra: dict[str, Any] = field(default_factory=dict)
-    group_duals: dict[str, np.ndarray] = field(default_factory=dict)
-    modified: bool = False
-    extra_residuals: tuple[float, ...] = ()
-    extra_duals: tuple[np.ndarray, ...] = ()
-    kkt_gap: float = float("nan")
-
-    @property
-    def ok(self) -> bool:
-        """True when the status is OPTIMAL (certified error within the requested accuracy)."""
-        return self.status is Status.OPTIMAL
-
-    @property
-    def relative_error(self) -> float:
-        """The certified error relative to ``max|R| / (1 - lambda)`` (``inf`` without one,
-        and for a modified solve, whose optimum has no certificate)."""
-        if self.certificate is None or not np.isfinite(self.error_bound):
-            return float("inf")
-        return self.certificate.relative_error()
 
 
 #: cvxpy's statuses in lpbounds' vocabulary, before the certificate has its say.
@@ -476,7 +362,7 @@ def _crashed(solver: str, options: dict[str, Any], exc: BaseException, seconds: 
 class CvxpyBackend(Backend):
     """Through cvxpy (:attr:`Formulation.problem`, any installed LP solver, extra constraints).
 
-    HiGHS goes through :class:`~lpbounds.formulations._highs.CvxpyHighs`, cvxpy's own HiGHS
+    HiGHS goes through :class:`~lpbounds.formulations.highs.CvxpyHighs`, cvxpy's own HiGHS
     interface with the rows handed over as ``A x >= b``, as ``backend="highspy"`` does
     (cvxpy's stock interface writes ``-A x <= -b``, on which HiGHS' interior point method
     takes a different number of iterations: 42 instead of 30 on the paper's UBLP). The
@@ -499,7 +385,7 @@ class CvxpyBackend(Backend):
         """Call the solver through cvxpy on ``problem`` (already scaled: ``scaling`` is only
         a record here); map its status; keep any point it returned."""
         adapter = (
-            form._highs_adapter() if solver == "HIGHS" and not problem.is_mixed_integer() else None
+            form.highs_adapter() if solver == "HIGHS" and not problem.is_mixed_integer() else None
         )
         t0 = time.perf_counter()
         try:
@@ -519,9 +405,9 @@ class CvxpyBackend(Backend):
             return _crashed(solver, options, exc, time.perf_counter() - t0)
         status = _STATUS.get(problem.status, Status.SOLVER_ERROR)
         if adapter is not None and status is Status.LIMIT:
-            status = HIGHS_STATUS.get(adapter.model_status, status)
+            status = status_of(adapter.model_status, status)
         x = form.point()  # kept whatever the status: solve() decides what it is worth
-        y = form._stacked_duals(problem.constraints[: len(form.constraints)])
+        y = form.stacked_duals(problem.constraints[: len(form.constraints)])
         stats = problem.solver_stats
         compile_s = float(getattr(problem, "compilation_time", None) or 0.0)
         solve_s = float(stats.solve_time) if stats and stats.solve_time else 0.0
@@ -553,7 +439,7 @@ def _canon(options: dict[str, Any]) -> dict[str, Any]:
 
 
 class HighspyBackend(Backend):
-    """highspy directly on ``(A, b, c)`` (:func:`~lpbounds.formulations._highs.pass_lp`).
+    """highspy directly on ``(A, b, c)`` (:func:`~lpbounds.formulations.highs.pass_lp`).
 
     HiGHS only, no extra constraints; options by HiGHS' own names (``time_limit``,
     ``highs_options={"solver": "ipm"}`` or ``solver``-free keys such as ``presolve="off"``);
@@ -573,16 +459,17 @@ class HighspyBackend(Backend):
         basis: Any = None,
         scaling: _Scaling = _NO_SCALING,
     ) -> _Run:
-        import highspy
-
         t0 = time.perf_counter()
         with solver_output(verbose) as verbose:
             h = quiet_highs()
             set_options(h, options, verbose)  # a bad option is the caller's error: raised
             try:
                 pass_lp(h, form.A, *scaling.data(form))
-                if basis is not None and h.setBasis(basis) == highspy.HighsStatus.kError:
-                    raise SolverError(f"{form.name}: HiGHS rejected the starting basis")
+                if basis is not None:
+                    try:
+                        set_basis(h, basis)
+                    except SolverError as exc:
+                        raise SolverError(f"{form.name}: {exc}") from None
                 compile_s = time.perf_counter() - t0
                 hr = run_highs(h)
             except Exception as exc:  # HiGHS' rejection or crash: a result, not an abort
@@ -672,6 +559,9 @@ class Formulation:
         variables: list[tuple[str, int]] | None = None,
         groups: list[tuple[str, int]] | None = None,
     ):
+        # the first model built takes HiGHS' once-per-process banner into the log (module
+        # comment above; idempotent, nothing after the first call)
+        silence_highs_banner()
         if name is not None:
             self.name = name
         self.A = sp.csr_matrix(A)
@@ -888,8 +778,9 @@ class Formulation:
             return None
         return np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts])
 
-    def _stacked_duals(self, constraints: Any = None) -> np.ndarray | None:
-        """The duals of ``constraints`` (default: the groups) stacked in row order."""
+    def stacked_duals(self, constraints: Any = None) -> np.ndarray | None:
+        """The duals of ``constraints`` (default: the groups) stacked in row order, as
+        cvxpy left them after a solve of :attr:`problem` (``None`` if any is unset)."""
         parts = []
         for con in self.constraints.values() if constraints is None else constraints:
             if con.dual_value is None:
@@ -973,9 +864,11 @@ class Formulation:
             raise ValidationError("warm_start='policy' needs backend='highspy'")
         return BACKENDS[backend]
 
-    def _highs_adapter(self) -> CvxpyHighs:
-        """This formulation's cvxpy HiGHS adapter (one per formulation: cvxpy caches the
-        compiled problem per solver object, so a second solve does not compile again)."""
+    def highs_adapter(self) -> CvxpyHighs:
+        """This formulation's cvxpy HiGHS adapter
+        (:class:`~lpbounds.formulations.highs.CvxpyHighs`), created on first use: one per
+        formulation, because cvxpy caches the compiled problem per solver object, so a
+        second solve does not compile again."""
         adapter = getattr(self, "_cvxpy_highs", None)
         if adapter is None:
             adapter = self._cvxpy_highs = CvxpyHighs()
@@ -1182,7 +1075,7 @@ class Formulation:
             problem = self._scaled_problem(scaling) if scaling.applied else self.problem
         run = route.run(self, solver, verbose, options, problem, basis, scaling)
         if scaling.applied:
-            raw = None if route.name != "cvxpy" else self._stacked_duals(problem.constraints)
+            raw = None if route.name != "cvxpy" else self.stacked_duals(problem.constraints)
             scaling.unscale(run)
             if route.name == "cvxpy" and run.x is not None:
                 self._store_values(run.x, None if raw is None else np.ldexp(raw, scaling.kc))

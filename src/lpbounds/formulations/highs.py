@@ -1,19 +1,46 @@
-r"""The highspy backend: ``min c'x s.t. A x >= b`` (x free) handed to HiGHS directly.
+r"""The one HiGHS layer: every ``highspy`` call of lpbounds goes through this module.
 
-:func:`highs_lp` builds a :class:`highspy.HighsLp` from a formulation's stored data
+Only this module constructs ``highspy.Highs`` (:func:`quiet_highs`) and maps HiGHS' model
+statuses to :class:`~lpbounds.status.Status` (:data:`STATUS_MAP`, :func:`status_of`).
+
+Models. :func:`highs_lp` builds a :class:`highspy.HighsLp` from a formulation's stored data
 ``(A, b, c)`` (``A`` CSR): rows ``b <= A x <= +inf``, columns free, the matrix column-wise
 (HiGHS' own storage). :func:`pass_lp` passes the same LP to a ``Highs`` through HiGHS'
 array interface (ten times faster than filling a ``HighsLp`` at 10M nonzeros).
-:func:`quiet_highs` is :func:`lpbounds._quiet.quiet_highs` (a ``Highs`` with its output
-off), re-exported so a caller needs one import. :class:`CvxpyHighs` is the cvxpy solver
-adapter the cvxpy path uses for HiGHS; :func:`run_highs`, :func:`set_options` and
-:func:`tight_basis` are the steps of one solve.
+:func:`pass_bounded_lp` passes a general ``row_lower <= A x <= row_upper``, ``col_lower <=
+x <= col_upper`` (row-wise, as the NLP's cut loop builds it); :func:`add_rows` appends rows
+to a passed model, :func:`clear_model` empties a ``Highs`` for reuse, :func:`set_basis`
+hands it a starting basis (:func:`tight_basis`), :func:`write_lp` writes a model file.
+
+One solve. :func:`set_options` passes options by name, :func:`run_highs` runs and reads
+back a :class:`HighsRun` (status, point, duals, objective, iteration counts).
+:class:`CvxpyHighs` is the cvxpy solver adapter the cvxpy path uses for HiGHS.
+
+The banner. HiGHS (highspy 1.16) prints its banner ("Running HiGHS 1.16.0 ... Copyright
+...") from C++ on the process's standard output the first time a ``highspy.Highs`` object
+is constructed, before any option (``output_flag``, ``log_to_console``) can be set, and
+neither an option nor an environment variable turns it off. cvxpy's HiGHS interface
+constructs two such objects per solve, so every process that solves with HiGHS printed it
+once, whatever ``verbose`` said. It is printed once per process only, so
+:func:`silence_highs_banner` constructs one ``Highs`` with the C-level standard output
+captured (:func:`lpbounds.formulations.quiet.captured_fds`) and sends the text to the
+``lpbounds`` logger at DEBUG; afterwards the options do the rest (cvxpy passes
+``log_to_console=verbose``, :func:`quiet_highs` sets ``output_flag=False``). Nothing
+happens at import: the first :class:`~lpbounds.formulations.base.Formulation` or
+:class:`~lpbounds.formulations.nlp.problem.NLP` built, and every :func:`quiet_highs` and
+:func:`solver_output`, call it first (idempotent), so no solve of a model built by
+lpbounds prints the banner, even a user's own ``lp.problem.solve(solver="HIGHS")``.
+:func:`solver_output` is the one call solver wrappers make around a solve.
 """
 
 from __future__ import annotations
 
+import contextlib
+import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
@@ -21,21 +48,102 @@ import numpy as np
 import scipy.sparse as sp
 from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as _CvxpyHIGHS
 
-from .._quiet import quiet_highs
 from ..errors import SolverError, ValidationError
 from ..status import Status
+from .quiet import captured_fds, solver_output_shown
 
 __all__ = [
     "STATUS_MAP",
     "CvxpyHighs",
     "HighsRun",
+    "accepted_option_values",
+    "add_rows",
+    "clear_model",
+    "highs_banner_silenced",
     "highs_lp",
+    "pass_bounded_lp",
     "pass_lp",
     "quiet_highs",
     "run_highs",
+    "set_basis",
     "set_options",
+    "silence_highs_banner",
+    "solver_output",
+    "status_of",
     "tight_basis",
+    "write_lp",
 ]
+
+
+# ---------------------------------------------------------------------------- the banner
+_lock = threading.Lock()
+_banner_done = False
+
+
+def silence_highs_banner() -> None:
+    """Print HiGHS' once-per-process banner into the log instead of stdout (idempotent;
+    nothing when highspy is not installed or after
+    :func:`~lpbounds.formulations.quiet.show_solver_output`).
+
+    Called lazily, never at import: by the first
+    :class:`~lpbounds.formulations.base.Formulation` or
+    :class:`~lpbounds.formulations.nlp.problem.NLP` constructed and by :func:`quiet_highs`
+    and :func:`solver_output` (3 ms, once), so no HiGHS solve of a model built with
+    lpbounds prints the banner, even a user's own ``lp.problem.solve(solver="HIGHS")``.
+    """
+    global _banner_done
+    if _banner_done or solver_output_shown():
+        return
+    with _lock:
+        if _banner_done:
+            return
+        try:
+            import highspy
+        except ImportError:
+            _banner_done = True
+            return
+        with captured_fds((1,)):
+            highspy.Highs()
+        _banner_done = True
+
+
+def highs_banner_silenced() -> bool:
+    """Whether :func:`silence_highs_banner` has taken HiGHS' banner in this process (so a
+    ``highspy.Highs`` has been constructed here); ``False`` right after import."""
+    return _banner_done
+
+
+@contextlib.contextmanager
+def solver_output(verbose: bool = False) -> Iterator[bool]:
+    """Wrap a solver call: the solver prints nothing it was not asked for.
+
+    ``with solver_output(verbose) as verbose: problem.solve(..., verbose=verbose)``. The
+    value is ``verbose`` or the command line's ``--verbose``
+    (:func:`~lpbounds.formulations.quiet.show_solver_output`): then the solver prints its
+    banner and log as it likes; otherwise HiGHS' banner is silenced first (the solvers'
+    own logs are off through their options, which cvxpy sets from ``verbose``).
+    """
+    show = bool(verbose or solver_output_shown())
+    if not show:
+        silence_highs_banner()
+    yield show
+
+
+def quiet_highs() -> Any:
+    """A ``highspy.Highs`` with ``output_flag`` off, its banner in the log rather than on
+    stdout (unless :func:`~lpbounds.formulations.quiet.show_solver_output`); a caller that
+    wants HiGHS' log turns ``output_flag`` back on. The only constructor of ``Highs`` in
+    lpbounds."""
+    import highspy
+
+    if not solver_output_shown():
+        silence_highs_banner()
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    return h
+
+
+# ---------------------------------------------------------------------------- models
 
 
 def highs_lp(A: sp.spmatrix | sp.sparray, b: np.ndarray, c: np.ndarray) -> Any:
@@ -134,9 +242,129 @@ def pass_lp(h: Any, A: Any, b: Any, c: Any) -> None:
     _LpArrays.of(A, b, c).pass_to(h)
 
 
+def pass_bounded_lp(
+    h: Any,
+    c: np.ndarray,
+    A: sp.spmatrix | sp.sparray,
+    row_lower: np.ndarray,
+    row_upper: np.ndarray,
+    col_lower: np.ndarray,
+    col_upper: np.ndarray,
+) -> None:
+    """Pass ``min c'x s.t. row_lower <= A x <= row_upper, col_lower <= x <= col_upper``
+    (infinite sides allowed) to the ``Highs`` object ``h``.
+
+    The matrix goes row-wise (``A`` as CSR, indices sorted) in a ``highspy.HighsLp``: the
+    route the NLP's cut loop has always taken (its LPs are small; :func:`pass_lp` is the
+    fast route for the formulations' ``A x >= b``).
+
+    Raises
+    ------
+    SolverError
+        If HiGHS rejects the model (``passModel`` returns ``kError``).
+    """
+    import highspy
+
+    a = A.tocsr()
+    a.sort_indices()
+    lp = highspy.HighsLp()
+    lp.num_col_ = int(a.shape[1])
+    lp.num_row_ = int(a.shape[0])
+    lp.col_cost_ = np.asarray(c, dtype=np.float64)
+    lp.col_lower_ = np.asarray(col_lower, dtype=np.float64)
+    lp.col_upper_ = np.asarray(col_upper, dtype=np.float64)
+    lp.row_lower_ = np.asarray(row_lower, dtype=np.float64)
+    lp.row_upper_ = np.asarray(row_upper, dtype=np.float64)
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
+    lp.a_matrix_.num_col_ = lp.num_col_
+    lp.a_matrix_.num_row_ = lp.num_row_
+    lp.a_matrix_.start_ = a.indptr.astype(np.int32)
+    lp.a_matrix_.index_ = a.indices.astype(np.int32)
+    lp.a_matrix_.value_ = a.data.astype(np.float64)
+    if h.passModel(lp) == highspy.HighsStatus.kError:
+        raise SolverError("HiGHS rejected the LP (passModel returned kError)")
+
+
+def add_rows(h: Any, A: Any, lower: np.ndarray, upper: np.ndarray | None = None) -> None:
+    """Append the rows ``lower <= A x <= upper`` (``A`` dense or sparse, one row each;
+    ``upper`` default ``+inf``) to the model passed to ``h``; the next :func:`run_highs`
+    warm-starts from the last basis."""
+    a = sp.csr_matrix(A)
+    a.sort_indices()
+    h.addRows(
+        a.shape[0],
+        np.asarray(lower, dtype=np.float64),
+        np.full(a.shape[0], np.inf) if upper is None else np.asarray(upper, dtype=np.float64),
+        int(a.nnz),
+        a.indptr[:-1].astype(np.int32),
+        a.indices.astype(np.int32),
+        a.data.astype(np.float64),
+    )
+
+
+def clear_model(h: Any) -> None:
+    """Empty the ``Highs`` object ``h`` (its options kept) for the next model."""
+    h.clearModel()
+
+
+def set_basis(h: Any, basis: Any) -> None:
+    """Hand ``h`` a starting basis (:func:`tight_basis`).
+
+    Raises
+    ------
+    SolverError
+        If HiGHS rejects it.
+    """
+    import highspy
+
+    if h.setBasis(basis) == highspy.HighsStatus.kError:
+        raise SolverError("HiGHS rejected the starting basis")
+
+
+def write_lp(A: Any, b: Any, c: Any, path: Path) -> tuple[bool, bool]:
+    """Write ``min c'x s.t. A x >= b`` (``x`` free, :func:`highs_lp`) to the model file
+    ``path`` with HiGHS (the format from the suffix: ``.mps``, ``.lp``).
+
+    Returns
+    -------
+    (accepted, written) : (bool, bool)
+        Whether HiGHS accepted the model (``passModel`` not ``kError``; nothing is written
+        otherwise) and whether ``writeModel`` reported success. ``kWarning`` counts as
+        success: HiGHS names the unnamed columns ``c0..`` and rows ``r0..``. The caller
+        words the failure (:mod:`lpbounds.studies.export`).
+    """
+    import highspy
+
+    h = quiet_highs()
+    if h.passModel(highs_lp(A, b, c)) == highspy.HighsStatus.kError:
+        return False, False
+    return True, h.writeModel(str(path)) != highspy.HighsStatus.kError
+
+
+def accepted_option_values(option: str, values: tuple[Any, ...]) -> tuple[Any, ...]:
+    """The ``values`` of the HiGHS option ``option`` that the installed highspy accepts
+    (``setOptionValue`` returns ``kOk``), in the order given."""
+    import highspy
+
+    h = quiet_highs()  # no banner on stdout
+    return tuple(v for v in values if h.setOptionValue(option, v) == highspy.HighsStatus.kOk)
+
+
 # ---------------------------------------------------------------------------- one run
-#: HiGHS' model statuses in lpbounds' vocabulary (before the certificate has its say).
+#: HiGHS' model statuses (``HighsModelStatus`` member names) in lpbounds' vocabulary, before
+#: the certificate has its say: the one place they are mapped (:func:`status_of`). Every
+#: member of highspy 1.16's ``HighsModelStatus`` is listed; the statuses with no point
+#: (not yet solved, an error of the load, model, presolve, solve or postsolve, an empty
+#: model, out of memory) are SOLVER_ERROR, as is a name a later highspy adds.
 STATUS_MAP: dict[str, Status] = {
+    "kNotset": Status.SOLVER_ERROR,
+    "kLoadError": Status.SOLVER_ERROR,
+    "kModelError": Status.SOLVER_ERROR,
+    "kPresolveError": Status.SOLVER_ERROR,
+    "kSolveError": Status.SOLVER_ERROR,
+    "kPostsolveError": Status.SOLVER_ERROR,
+    "kModelEmpty": Status.SOLVER_ERROR,
+    "kMemoryLimit": Status.SOLVER_ERROR,
     "kOptimal": Status.OPTIMAL,
     "kTimeLimit": Status.TIME_LIMIT,
     "kIterationLimit": Status.ITERATION_LIMIT,
@@ -152,14 +380,27 @@ STATUS_MAP: dict[str, Status] = {
 }
 
 
+def status_of(model_status: str, default: Status = Status.SOLVER_ERROR) -> Status:
+    """The :class:`~lpbounds.status.Status` of a HiGHS model status (its member name, as
+    ``Highs.getModelStatus().name``); ``default`` for a name not in :data:`STATUS_MAP`."""
+    return STATUS_MAP.get(model_status, default)
+
+
 @dataclass
 class HighsRun:
     """What one ``Highs.run()`` returned.
 
     ``status`` maps HiGHS' model status (``model_status``, its name) through
-    :data:`STATUS_MAP` (anything else: SOLVER_ERROR); ``x`` and ``y`` (row duals, ``>= 0``
-    on ``>=`` rows of a minimisation) are ``None`` when HiGHS has no valid primal
-    solution (a limit hit before the first iterate, an error).
+    :func:`status_of`; ``x`` and ``y`` (row duals, ``>= 0`` on ``>=`` rows of a
+    minimisation) are ``None`` when HiGHS has no valid primal solution (a limit hit before
+    the first iterate, an error), ``y`` also when HiGHS has no valid dual solution.
+
+    Two iteration counts, kept apart because lpbounds reports both: ``iterations`` is the
+    sum of HiGHS' simplex, IPM, crossover and PDLP counts (each clipped at 0: HiGHS reports
+    -1 for a method it did not run), what an :class:`~lpbounds.formulations.LPResult`
+    reports; ``simplex_iterations`` is HiGHS' ``simplex_iteration_count`` as HiGHS gives
+    it, what the NLP's cut loop counts. ``objective`` is HiGHS' own objective value
+    (``info.objective_function_value``, not certified).
     """
 
     status: Status
@@ -168,6 +409,8 @@ class HighsRun:
     y: np.ndarray | None
     iterations: int
     seconds: float
+    objective: float = float("nan")
+    simplex_iterations: int = 0
 
 
 def set_options(h: Any, options: dict[str, Any], verbose: bool) -> None:
@@ -212,7 +455,8 @@ def _option_ok(h: Any, key: str, value: Any) -> bool:
 
 
 def run_highs(h: Any) -> HighsRun:
-    """Run the model passed to ``h`` and read back its status, point and duals."""
+    """Run the model passed to ``h`` and read back its status, point, duals, objective and
+    iteration counts (:class:`HighsRun`)."""
     t0 = time.perf_counter()
     h.run()
     seconds = time.perf_counter() - t0
@@ -229,7 +473,11 @@ def run_highs(h: Any) -> HighsRun:
     has_x = bool(sol.value_valid)
     x = np.array(sol.col_value, dtype=np.float64) if has_x else None
     y = np.array(sol.row_dual, dtype=np.float64) if has_x and sol.dual_valid else None
-    return HighsRun(STATUS_MAP.get(name, Status.SOLVER_ERROR), name, x, y, iters, seconds)
+    return HighsRun(
+        status_of(name), name, x, y, iters, seconds,
+        objective=float(info.objective_function_value),
+        simplex_iterations=int(info.simplex_iteration_count),
+    )  # fmt: skip
 
 
 def tight_basis(n_rows: int, n_cols: int, tight_rows: np.ndarray) -> Any:
@@ -274,7 +522,7 @@ def _dual_ray(h: Any, n_rows: int) -> tuple[Any, bool, np.ndarray]:
     return st, bool(has_ray), -np.asarray(ray, dtype=np.float64)
 
 
-class CvxpyHighs(_CvxpyHIGHS):  # type: ignore[misc,valid-type]
+class CvxpyHighs(_CvxpyHIGHS):
     """cvxpy's HiGHS interface, passing the inequality rows as ``>=`` rows.
 
     cvxpy's cone form is ``A_d x <= b_d`` (``A x >= b`` becomes ``-A x <= -b``), and its

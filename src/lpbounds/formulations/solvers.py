@@ -191,17 +191,12 @@ OPTION_SETS: dict[str, dict[str, dict[str, Any]]] = {
 def highs_algorithms() -> tuple[str, ...]:
     """The values of HiGHS' ``solver`` option that the installed highspy accepts."""
     try:
-        import highspy
+        import highspy  # noqa: F401
     except ImportError:  # pragma: no cover - highspy is a dependency
         return ()
-    from ._quiet import quiet_highs
+    from .highs import accepted_option_values
 
-    h = quiet_highs()  # no banner on stdout
-    return tuple(
-        a
-        for a in ("simplex", "ipm", "pdlp")
-        if h.setOptionValue("solver", a) == highspy.HighsStatus.kOk
-    )
+    return accepted_option_values("solver", ("simplex", "ipm", "pdlp"))
 
 
 def option_sets(solver: str) -> dict[str, dict[str, Any]]:

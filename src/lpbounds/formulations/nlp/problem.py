@@ -30,11 +30,11 @@ bracket ``lower_bound <= c'w* <= upper_bound`` and an iteration log:
     ``[l, h]`` (``h >= w*``: the certified value of the minimiser's strategy at ``l``);
     the master is a Bellman row system, solved by modified policy iteration (or, with
     ``backend="highspy"``/``"cvxpy"``, as an LP). Closes the bracket in a few dozen
-    rounds whatever ``M``; see :mod:`lpbounds.formulations.nlp_monotone` for the proofs.
+    rounds whatever ``M``; see :mod:`lpbounds.formulations.nlp.monotone` for the proofs.
     ``cuts="lift-and-project"``: Balas' disjunctive cuts on a master LP relaxation; every
     master optimum is a lower bound (weak duality: the log's lower side), strategies
     read off the master points give the upper bound and the returned point (the
-    incumbent). See :mod:`lpbounds.formulations.nlp_cuts` for the CGLP, its
+    incumbent). See :mod:`lpbounds.formulations.nlp.cuts` for the CGLP, its
     normalisation and how each cut is made valid (closes only small instances).
 ``"strategy-iteration"``
     Fix one term per disjunction (the minimiser's strategy ``sigma``), solve that row
@@ -61,7 +61,8 @@ see the same rows; a partition whose states share no allowed action would have t
 bound ``-inf`` and is refused with a :class:`~lpbounds.errors.ValidationError` naming it.
 
 **Certified results.** Whatever the method, the result's bounds come from the returned
-point ``w`` alone: :func:`lpbounds.certificate.certify` with the max-min operator ``G``
+point ``w`` alone: :func:`lpbounds.certification.certificate.certify` with the max-min operator
+``G``
 (a ``lambda``-contraction, Fact 2) gives ``lower_values <= w* <= upper_values`` in
 floating point (contraction argument plus a derived rounding margin), hence
 ``lower_values(i) <= min_{S_i} V*``; ``lower_bound``/``upper_bound`` on ``c'w*`` are
@@ -87,156 +88,30 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from ..certificate import Certificate, certify
-from ..dp import solve_exact, solve_game, threads_for
-from ..errors import ConvergenceError, SolverError, ValidationError
-from ..mdp import FiniteMDP
-from ..partition import Partition
-from ..rows import BellmanRows
-from ..status import Status
-from ..tolerances import NLP_GAP_RTOL, NLP_MILP_GAP_RTOL, NLP_SWITCH_RTOL, dp_scale
-from .base import aggregated_cost, resolve_solver
+from ...certification.certificate import Certificate, certify
+from ...dp import solve_exact, solve_game, threads_for
+from ...errors import ConvergenceError, SolverError, ValidationError
+from ...model.mdp import FiniteMDP
+from ...model.partition import Partition
+from ...rows import BellmanRows
+from ...status import Status
+from ...tolerances import NLP_EXACT_RTOL, NLP_GAP_RTOL, NLP_MILP_GAP_RTOL, NLP_SWITCH_RTOL, dp_scale
+from ..base import aggregated_cost, resolve_solver
+from ..highs import silence_highs_banner
+from .results import NLPIteration, NLPResult
+from .stop import StopReason
 
 if TYPE_CHECKING:
-    from .nlp_cuts import NLPMaster
+    from .cuts import NLPMaster
 
-__all__ = ["METHOD_KEYWORDS", "NLP", "NLPMILP", "NLPIteration", "NLPResult"]
+__all__ = ["METHOD_KEYWORDS", "NLP", "NLPMILP", "NLPIteration", "NLPResult", "StopReason"]
 
 Method = Literal["cutting-planes", "strategy-iteration", "milp", "fixed-point"]
 METHODS: tuple[str, ...] = ("cutting-planes", "strategy-iteration", "milp", "fixed-point")
 #: The cut families of ``solve("cutting-planes", cuts=...)``.
 CUT_FAMILIES: tuple[str, ...] = ("monotone", "lift-and-project")
 
-#: Exact solves (fixed points of strategies and of G) stop at this relative residual.
-_EXACT_RTOL = 1e-13
 _TINY = float(np.finfo(np.float64).tiny)
-
-
-@dataclass
-class NLPIteration:
-    """One entry of the iteration log (``nan`` where a method has no such number)."""
-
-    iteration: int
-    lower: float
-    upper: float
-    gap: float
-    cuts_added: int
-    seconds: float
-    max_violation: float = float("nan")
-    master_objective: float = float("nan")
-
-
-@dataclass
-class NLPResult:
-    """The outcome of :meth:`NLP.solve`.
-
-    Every bound in it is certified from the returned point ``values`` alone
-    (:func:`lpbounds.certificate.certify` on the NLP's min-rows with the max-min operator
-    ``G``), whatever the method or solver claimed.
-
-    Attributes
-    ----------
-    formulation : str
-        "NLP".
-    method : str
-    values : ndarray (M,)
-        The method's point: ``w*`` up to ``error_bound`` (for the cutting planes, the best
-        feasible point found, the incumbent of the upper bound; for the MILP the value of
-        its strategy).
-    state_values : ndarray (n,)
-        ``Phi values``.
-    lower_values, upper_values : ndarray (M,)
-        The certificate's bracket: ``lower_values <= w* <= upper_values`` in floating
-        point, hence ``lower_values(i) <= min_{x in S_i} V*(x)``. Taken from the
-        certificate only (never from a solver's objective or a cutting-plane master).
-    lower_bound, upper_bound : float
-        ``Certificate.objective_bracket(cost)``: a certified bracket on ``c'w*``.
-    gap : float
-        ``upper_bound - lower_bound``.
-    status : lpbounds.status.Status
-        ``OPTIMAL`` when the certified bracket closed to the requested gap: the computed
-        residual ``||G values - values||_inf <= gap_rtol / 2 * max|R|``, so that
-        ``max(upper_values - lower_values) <= gap_rtol * scale`` up to the certificate's
-        rounding margin (``Certificate.is_accurate``); ``TIME_LIMIT`` /
-        ``ITERATION_LIMIT`` / ``LIMIT`` when a limit stopped the method first (the point
-        and its bracket are kept); ``INACCURATE`` when the method stopped on its own with
-        a wider bracket (for example cutting planes that found no cut).
-    stop_reason : str
-        The method's own reason, for humans.
-    objective : float
-        ``c'values``.
-    residual : float
-        ``||G values - values||_inf`` as computed.
-    error_bound : float
-        The certificate's ``||values - w*||_inf`` bound (contraction argument plus rounding
-        margin).
-    certificate : lpbounds.certificate.Certificate
-    iterations : int
-        Rounds (cutting planes), strategies evaluated (strategy iteration), value
-        iterations (fixed point), 1 (MILP).
-    cuts : int
-        Cutting planes only: cuts added (lift-and-project), or the monotone cuts in the
-        last master (monotone; ``extra["resolved"]`` counts the resolved disjunctions).
-    seconds : float
-    log : list of NLPIteration
-        The method's own bracket per iteration (the cutting planes' master bound is not
-        rounding-certified; the final entry of the other methods is the certified one).
-    cost : ndarray (M,)
-        The partition cost ``c-bar``.
-    solver : str
-    gap_rtol : float
-        The relative accuracy the method was asked for.
-    scale : float
-        ``max|R| / (1 - lambda)`` over the NLP's terms: the unit of ``gap_rtol``.
-    extra : dict
-        Method-specific data (``method_bracket``: the method's own bracket on ``c'w*``;
-        the cuts, the MILP's raw point and status, ...).
-    """
-
-    formulation: str
-    method: str
-    values: np.ndarray
-    state_values: np.ndarray
-    lower_values: np.ndarray
-    upper_values: np.ndarray
-    lower_bound: float
-    upper_bound: float
-    gap: float
-    status: Status
-    stop_reason: str
-    objective: float
-    residual: float
-    error_bound: float
-    certificate: Certificate
-    iterations: int
-    cuts: int
-    seconds: float
-    log: list[NLPIteration]
-    cost: np.ndarray
-    solver: str
-    gap_rtol: float
-    scale: float
-    extra: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def converged(self) -> bool:
-        """``status is Status.OPTIMAL`` (derived: the status is the one source of truth)."""
-        return self.status is Status.OPTIMAL
-
-    @property
-    def relative_gap(self) -> float:
-        """``gap / (sum(cost) * scale)``: the bracket on ``c'w*`` in the problem's units."""
-        unit = float(self.cost.sum()) * self.scale
-        return self.gap / unit if unit > 0 else (0.0 if self.gap <= 0 else float("inf"))
-
-    def summary(self) -> str:
-        """One line: method, status, bracket, gap, rounds, cuts, time."""
-        return (
-            f"NLP[{self.method}] {self.status}: c'w* in [{self.lower_bound:.10g}, "
-            f"{self.upper_bound:.10g}] gap {self.gap:.3e} after {self.iterations} iterations, "
-            f"{self.cuts} cuts, {self.seconds:.3f} s; "
-            f"{'converged' if self.converged else 'NOT converged'} ({self.stop_reason})"
-        )
 
 
 #: The keywords of each method (besides ``gap_rtol``, ``progress`` and
@@ -340,6 +215,9 @@ class NLP:
         if not isinstance(partition, Partition):
             raise ValidationError(f"partition must be a Partition; got {type(partition).__name__}")
         cbar = aggregated_cost(mdp, partition, cost, partition_cost)
+        # HiGHS' banner to the log before anything can solve this NLP's models (its MILP
+        # and masters are cvxpy problems a user may solve directly); once per process
+        silence_highs_banner()
         self.mdp = mdp
         self.partition = partition
         self.cost = cbar
@@ -374,7 +252,8 @@ class NLP:
     def milp(self) -> NLPMILP:
         """The big-M MILP of eq. 25 (:class:`NLPMILP`) in a certified box, built once.
 
-        ``lower``: :func:`~lpbounds.certificate.certify` (max-min) at the constant point
+        ``lower``: :func:`~lpbounds.certification.certificate.certify` (max-min) at the constant
+        point
         ``box[0]``, a floating-point lower bound on ``w*``; ``upper``: the certificate's
         upper side at the value of the minimiser's strategy chosen at ``box[1]`` (a
         feasible point, so ``>= w*``). The MILP's optimum is therefore ``c'w*``.
@@ -409,11 +288,11 @@ class NLP:
         optimum is ``c'`` of that round's row-system least element.
         """
         if self._master is None and self._master_pending is not None:
-            from .nlp_monotone import MonotoneMaster
+            from .monotone import MonotoneMaster
 
             self._master = MonotoneMaster(*self._master_pending)
         if self._master is None:
-            from .nlp_cuts import NLPMaster, master_data
+            from .cuts import NLPMaster, master_data
 
             a, b = self.term_matrix
             single = self.single_rows
@@ -454,7 +333,7 @@ class NLP:
 
     def residual(self, w: Any) -> float:
         """``||G w - w||_inf``."""
-        ww = self.rows._vec(w)
+        ww = self.rows.as_vector(w)
         return float(np.abs(self.game_operator(ww) - ww).max())
 
     def best_terms(self, w: np.ndarray, current: np.ndarray | None = None) -> np.ndarray:
@@ -491,7 +370,7 @@ class NLP:
     def strategy_value(self, sel: np.ndarray) -> tuple[np.ndarray, float]:
         """``v_sigma`` (the least element of the strategy's rows) and ``||T_sigma v - v||_inf``."""
         sub = self.strategy_rows(sel)
-        res = solve_exact(sub, method="pi", tol=_EXACT_RTOL * self.scale, evaluation="direct")
+        res = solve_exact(sub, method="pi", tol=NLP_EXACT_RTOL * self.scale, evaluation="direct")
         v = res.values
         return v, float(np.abs(sub.apply_max(v)[0] - v).max())
 
@@ -577,7 +456,7 @@ class NLP:
         normalization : {"multipliers", "alpha"}
             ``"cutting-planes"``: the CGLP's normalisation, ``sum(u) + sum(v) = 1``
             (default) or ``max|alpha| <= 1`` (see
-            :func:`~lpbounds.formulations.nlp_cuts.cglp_data`).
+            :func:`~lpbounds.formulations.nlp.cuts.cglp_data`).
         solver_options : dict
             ``"cutting-planes"`` (cvxpy backend), ``"milp"``: passed to the solver.
 
@@ -669,14 +548,14 @@ class NLP:
 
         dp = solve_game(
             self.rows,
-            tol=_EXACT_RTOL * self.scale,
+            tol=NLP_EXACT_RTOL * self.scale,
             max_iter=max_iter,
             callback=cb,
             raise_on_failure=False,
         )
         return _Outcome(
             dp.values,
-            stop_reason="residual <= tol" if dp.converged else "max_iter",
+            stop_reason=StopReason.RESIDUAL_TOL if dp.converged else StopReason.MAX_ITER,
             limit=None if dp.converged else Status.ITERATION_LIMIT,
             iterations=dp.iterations,
             log=log,
@@ -693,7 +572,7 @@ class NLP:
         upper = np.inf
         v = np.full(self.rows.n_vars, self.box[1])
         limit: Status | None = Status.ITERATION_LIMIT
-        stop, it = "max_iter", 0
+        stop, it = StopReason.MAX_ITER, 0
         for it in range(1, max_iter + 1):
             v, ub = self.strategy_upper_bound(sel)
             upper = min(upper, ub)
@@ -702,10 +581,10 @@ class NLP:
             log.append(e)
             tick(e)
             if np.array_equal(new, sel):
-                stop, limit = "strategy stable", None
+                stop, limit = StopReason.STRATEGY_STABLE, None
                 break
             if self._limit(t0, time_limit):
-                stop, limit = "time_limit", Status.TIME_LIMIT
+                stop, limit = StopReason.TIME_LIMIT, Status.TIME_LIMIT
                 break
             sel = new
         return _Outcome(
@@ -762,9 +641,15 @@ class NLP:
         dual_bound = _mip_dual_bound(stats)
         e = NLPIteration(1, dual_bound, ub, ub - dual_bound, 0, time.perf_counter() - t0)
         tick(e)
+        if limit is Status.TIME_LIMIT:
+            stop = StopReason.TIME_LIMIT
+        elif limit is not None:
+            stop = StopReason.SOLVER_LIMIT
+        else:
+            stop = StopReason.MILP_OPTIMAL if status == cp.OPTIMAL else StopReason.MILP_INACCURATE
         return _Outcome(
             v,
-            stop_reason=str(status) if limit is None else f"{status} ({limit})",
+            stop_reason=stop,
             limit=limit,
             iterations=1,
             log=[e],
@@ -772,6 +657,7 @@ class NLP:
             extra={
                 "w_milp": None if model.w.value is None else np.asarray(model.w.value, float),
                 "milp_status": str(status),
+                "milp_limit": limit,
                 "milp_objective": float(model.problem.value)
                 if model.w.value is not None
                 else np.nan,
@@ -798,7 +684,7 @@ class NLP:
     def _cutting_planes(
         self, opts: dict[str, Any], gap_rtol: float, tick: Callable[..., None]
     ) -> _Outcome:
-        from .nlp_cuts import cutting_planes
+        from .cuts import cutting_planes
 
         if opts["cuts"] not in CUT_FAMILIES:
             raise ValidationError(f"cuts must be one of {CUT_FAMILIES}; got {opts['cuts']!r}")
@@ -820,6 +706,8 @@ class NLP:
             on_round=tick,
             **(opts["solver_options"] or {}),
         )
+        # the loop's master, with every round's cuts: what self.master returns from now on
+        self._master, self._master_pending = out.master, None
         solver = (
             "HIGHS (highspy, persistent)" if backend == "highspy" else f"{opts['solver']} (cvxpy)"
         )
@@ -839,7 +727,10 @@ class NLP:
     @staticmethod
     def _cut_outcome(out: Any, solver: str, extra: dict[str, Any]) -> _Outcome:
         """The outcome of either cut loop: its point, stop, limit, rounds, log and bracket."""
-        limits = {"max_rounds": Status.ITERATION_LIMIT, "time_limit": Status.TIME_LIMIT}
+        limits = {
+            StopReason.MAX_ROUNDS: Status.ITERATION_LIMIT,
+            StopReason.TIME_LIMIT: Status.TIME_LIMIT,
+        }
         return _Outcome(
             out.best_point,
             stop_reason=out.stop_reason,
@@ -855,7 +746,7 @@ class NLP:
     def _monotone(
         self, opts: dict[str, Any], gap_rtol: float, tick: Callable[..., None]
     ) -> _Outcome:
-        from .nlp_monotone import monotone_cuts
+        from .monotone import monotone_cuts
 
         backend = "rows" if opts["backend"] is None else opts["backend"]
         out = monotone_cuts(
@@ -892,7 +783,7 @@ class _Outcome:
     """What a method hands to :meth:`NLP._result`: its point and why it stopped."""
 
     values: np.ndarray
-    stop_reason: str
+    stop_reason: StopReason
     limit: Status | None  # the limit that stopped the method, None if it stopped on its own
     iterations: int
     log: list[NLPIteration]
@@ -943,7 +834,8 @@ class NLPMILP:
 
     The box must contain ``w*`` (then the MILP's optimum is ``c'w*``: ``w*`` is the least
     element of the NLP's feasible set, Fact 2). :meth:`NLP.milp` passes a certified one:
-    ``lower`` from :func:`~lpbounds.certificate.certify` (max-min operator) at the constant
+    ``lower`` from :func:`~lpbounds.certification.certificate.certify` (max-min operator) at the
+    constant
     point ``min rho / (1 - lambda)`` and ``upper`` from the certificate of the value of one
     strategy (a feasible point, so ``>= w*``; 3-6x faster than ``hi = max rho / (1 -
     lambda)`` on a 30-state, 6-partition garnet because the ``M_t`` shrink). Without them

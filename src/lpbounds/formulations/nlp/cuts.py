@@ -9,7 +9,7 @@ box ``[min rho, max rho] / (1 - lambda)`` are all built from the masked rows.
 
 The loop's own bracket (master bound, strategy values) is reported in the log and in
 ``NLPResult.extra["method_bracket"]``; the result's certified bounds come from the
-returned incumbent alone (:meth:`lpbounds.formulations.nlp.NLP.certify`).
+returned incumbent alone (:meth:`lpbounds.formulations.nlp.problem.NLP.certify`).
 
 Master LP (a relaxation of ``F`` intersected with the box, valid for ``w*``)
     ``min c'w  s.t.  G w >= h,  lo <= w <= hi`` where ``G w >= h`` holds the (i, u) with a
@@ -78,26 +78,41 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import SolverError, ValidationError
-from ..tolerances import (
+from ...errors import SolverError, ValidationError
+from ...status import Status
+from ...tolerances import (
     NLP_CUT_MIN_DEPTH_RTOL,
     NLP_CUT_SAFETY_RTOL,
     NLP_HIGHS_FEAS_TOL,
     NLP_VIOLATION_RTOL,
 )
-from .base import Formulation, resolve_solver
+from ..base import Formulation, resolve_solver
+from ..highs import (
+    add_rows,
+    clear_model,
+    pass_bounded_lp,
+    quiet_highs,
+    run_highs,
+    set_options,
+)
+from .results import NLPIteration
+from .stop import StopReason
 
 if TYPE_CHECKING:
-    from .nlp import NLP, NLPIteration
+    from .problem import NLP
 
 __all__ = [
     "CutGeneratingLP",
+    "CutLoopOutput",
     "GeneralLP",
+    "HighsSolution",
     "LPData",
     "NLPMaster",
+    "PersistentMaster",
     "TermLP",
     "cutting_planes",
     "highs_solve",
+    "loop_highs",
     "weak_duality_bound",
 ]
 
@@ -154,101 +169,96 @@ def weak_duality_bound(data: LPData, row_dual: np.ndarray) -> float:
 # ---------------------------------------------------------------------- highspy
 @dataclass
 class HighsSolution:
-    """What the loop needs from a HiGHS solve."""
+    """What the loop needs from one LP solve (highspy, or cvxpy for ``backend="cvxpy"``).
 
-    status: str
+    ``status`` is lpbounds' :class:`~lpbounds.status.Status` (HiGHS' model status mapped
+    by :func:`lpbounds.formulations.highs.status_of`; ``model_status`` keeps HiGHS' own
+    name, empty for a cvxpy solve). ``objective`` is the solver's own (not certified).
+    ``iterations`` is HiGHS' ``simplex_iteration_count`` (``HighsRun.simplex_iterations``;
+    cvxpy: the solver's count), the loop's count since it was written: not the sum over
+    HiGHS' methods that an LP result reports. ``x`` and ``row_dual`` are ``nan`` where
+    HiGHS has no valid primal or dual solution (never read unless ``status`` is OPTIMAL).
+    """
+
+    status: Status
     x: np.ndarray
     row_dual: np.ndarray
     objective: float
     iterations: int
+    model_status: str = ""
 
 
-def _highs() -> Any:
-    from .._quiet import quiet_highs
-
+def loop_highs() -> Any:
+    """A quiet ``Highs`` (:func:`~lpbounds.formulations.highs.quiet_highs`) set up for the
+    loop's LPs: presolve off, feasibility tolerances :data:`NLP_HIGHS_FEAS_TOL`."""
     h = quiet_highs()  # output_flag off, and HiGHS' banner to the log, not stdout
     # the loop's LPs are small and solved thousands of times: presolve costs more than
     # it saves (measured on a 250-cut master: 5x on the joint term LP, 2x on the CGLP)
-    h.setOptionValue("presolve", "off")
-    h.setOptionValue("primal_feasibility_tolerance", NLP_HIGHS_FEAS_TOL)
-    h.setOptionValue("dual_feasibility_tolerance", NLP_HIGHS_FEAS_TOL)
+    set_options(
+        h,
+        {
+            "presolve": "off",
+            "primal_feasibility_tolerance": NLP_HIGHS_FEAS_TOL,
+            "dual_feasibility_tolerance": NLP_HIGHS_FEAS_TOL,
+        },
+        verbose=False,
+    )
     return h
 
 
-def _highs_lp(data: LPData) -> Any:
-    import highspy
-
-    a = data.A.tocsr()
-    a.sort_indices()
-    lp = highspy.HighsLp()
-    lp.num_col_ = int(a.shape[1])
-    lp.num_row_ = int(a.shape[0])
-    lp.col_cost_ = np.asarray(data.c, dtype=np.float64)
-    lp.col_lower_ = np.asarray(data.col_lo, dtype=np.float64)
-    lp.col_upper_ = np.asarray(data.col_hi, dtype=np.float64)
-    lp.row_lower_ = np.asarray(data.row_lo, dtype=np.float64)
-    lp.row_upper_ = np.asarray(data.row_hi, dtype=np.float64)
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
-    lp.a_matrix_.num_col_ = lp.num_col_
-    lp.a_matrix_.num_row_ = lp.num_row_
-    lp.a_matrix_.start_ = a.indptr.astype(np.int32)
-    lp.a_matrix_.index_ = a.indices.astype(np.int32)
-    lp.a_matrix_.value_ = a.data.astype(np.float64)
-    return lp
+def _pass(h: Any, data: LPData) -> None:
+    pass_bounded_lp(h, data.c, data.A, data.row_lo, data.row_hi, data.col_lo, data.col_hi)
 
 
-def _read(h: Any) -> HighsSolution:
-    import highspy
-
-    st = h.getModelStatus()
-    status = "optimal" if st == highspy.HighsModelStatus.kOptimal else h.modelStatusToString(st)
-    sol = h.getSolution()
-    info = h.getInfo()
+def _solution(h: Any, n_cols: int, n_rows: int) -> HighsSolution:
+    """Run ``h`` (:func:`~lpbounds.formulations.highs.run_highs`) and read the loop's view."""
+    run = run_highs(h)
     return HighsSolution(
-        status=status,
-        x=np.array(sol.col_value, dtype=np.float64),
-        row_dual=np.array(sol.row_dual, dtype=np.float64),
-        objective=float(info.objective_function_value),
-        iterations=int(info.simplex_iteration_count),
+        status=run.status,
+        x=run.x if run.x is not None else np.full(n_cols, np.nan),
+        row_dual=run.y if run.y is not None else np.full(n_rows, np.nan),
+        objective=run.objective,
+        iterations=run.simplex_iterations,
+        model_status=run.model_status,
     )
 
 
 def highs_solve(data: LPData, h: Any = None) -> HighsSolution:
-    """Solve ``data`` cold with highspy (HiGHS' default tolerances); ``h``: a Highs to reuse."""
+    """Solve ``data`` cold with highspy (:func:`loop_highs`); ``h``: a ``Highs`` to reuse."""
     if h is None:
-        h = _highs()
+        h = loop_highs()
     else:
-        h.clearModel()
-    h.passModel(_highs_lp(data))
-    h.run()
-    return _read(h)
+        clear_model(h)
+    _pass(h, data)
+    n_rows, n_cols = data.A.shape
+    return _solution(h, n_cols, n_rows)
 
 
-class _PersistentMaster:
-    """The master LP as one HiGHS model; cuts are appended and the simplex warm-starts."""
+class PersistentMaster:
+    """The master LP as one HiGHS model; cuts are appended and the simplex warm-starts.
+
+    Attributes
+    ----------
+    data : LPData
+        The master so far (its rows: the single-term rows, then the cuts).
+    h : highspy.Highs
+        The HiGHS model of ``data`` (:func:`loop_highs`).
+    """
 
     def __init__(self, data: LPData) -> None:
         self.data = data
-        self.h = _highs()
-        self.h.passModel(_highs_lp(data))
+        self.h = loop_highs()
+        _pass(self.h, data)
 
     def add_cuts(self, alpha: np.ndarray, beta: np.ndarray) -> None:
-        a = sp.csr_matrix(alpha)
-        a.sort_indices()
-        self.h.addRows(
-            a.shape[0],
-            np.asarray(beta, dtype=np.float64),
-            np.full(a.shape[0], INF),
-            int(a.nnz),
-            a.indptr[:-1].astype(np.int32),
-            a.indices.astype(np.int32),
-            a.data.astype(np.float64),
-        )
+        """Append the cuts ``alpha w >= beta`` (one per row of ``alpha``)."""
+        add_rows(self.h, alpha, beta)
         self.data = _append_rows(self.data, alpha, beta)
 
     def solve(self) -> HighsSolution:
-        self.h.run()
-        return _read(self.h)
+        """Run HiGHS on the master as it stands (warm-started from the last basis)."""
+        n_rows, n_cols = self.data.A.shape
+        return _solution(self.h, n_cols, n_rows)
 
 
 def _append_rows(data: LPData, alpha: np.ndarray, beta: np.ndarray) -> LPData:
@@ -552,10 +562,10 @@ class _Backend:
                 f"backend='highspy' solves with HiGHS; for solver={solver!r} use backend='cvxpy'"
             )
         self.options = options
-        self.master: _PersistentMaster | None = None
+        self.master: PersistentMaster | None = None
         self.model: NLPMaster | None = None
         self.master_data: LPData | None = None
-        self.scratch = _highs() if kind == "highspy" else None
+        self.scratch = loop_highs() if kind == "highspy" else None
 
     def _cvxpy(
         self, data: LPData, cls: type[GeneralLP] = GeneralLP, model: GeneralLP | None = None
@@ -563,7 +573,7 @@ class _Backend:
         model = cls(data) if model is None else model
         res = model.solve(self.solver, raise_on_failure=False, **self.options)
         if not res.ok:
-            return HighsSolution(str(res.status), res.x, np.zeros(data.A.shape[0]), np.nan, 0)
+            return HighsSolution(res.status, res.x, np.zeros(data.A.shape[0]), np.nan, 0)
         # map the >= duals of to_geq back to data's rows (finite lower sides first)
         y = res.duals
         fl, fh = np.isfinite(data.row_lo), np.isfinite(data.row_hi)
@@ -571,14 +581,14 @@ class _Backend:
         k = int(fl.sum())
         row_dual[fl] += y[:k]
         row_dual[fh] -= y[k : k + int(fh.sum())]
-        return HighsSolution("optimal", res.x, row_dual, res.objective, res.iterations or 0)
+        return HighsSolution(Status.OPTIMAL, res.x, row_dual, res.objective, res.iterations or 0)
 
     def start_master(self, model: NLPMaster) -> None:
         """Solve ``model`` round by round (highspy: a persistent copy of it, kept in step)."""
         self.model = model
         self.master_data = model.data
         if self.kind == "highspy":
-            self.master = _PersistentMaster(model.data)
+            self.master = PersistentMaster(model.data)
 
     def add_cuts(self, alpha: np.ndarray, beta: np.ndarray) -> None:
         assert self.master_data is not None and self.model is not None
@@ -605,12 +615,12 @@ class _Backend:
         if self.kind == "highspy":
             joint = joint_term_data(*args)
             sol = highs_solve(joint, self.scratch)
-            if sol.status == "optimal":
+            if sol.status is Status.OPTIMAL:
                 out[:] = block_bounds(joint, sol.row_dual, n_terms)
             return out
         for t, p in enumerate(term_lps_data(*args)):
             sol = self._cvxpy(p, TermLP)
-            if sol.status == "optimal":
+            if sol.status is Status.OPTIMAL:
                 out[t] = weak_duality_bound(p, sol.row_dual)
         return out
 
@@ -618,7 +628,13 @@ class _Backend:
 # ---------------------------------------------------------------------- the loop
 @dataclass
 class CutLoopOutput:
-    """What :func:`cutting_planes` hands back to :meth:`NLP.solve`."""
+    """What :func:`cutting_planes` hands back to :meth:`NLP.solve`.
+
+    ``master`` is the loop's master LP as a cvxpy model with every round's cuts (the NLP
+    stores it as :attr:`NLP.master`); ``stop_reason`` one of :class:`StopReason`'s
+    ``GAP_CLOSED``, ``MAX_ROUNDS``, ``TIME_LIMIT``, ``NO_VIOLATED_DISJUNCTION``,
+    ``NO_CUT_FOUND``.
+    """
 
     lower: float
     upper: float
@@ -627,12 +643,13 @@ class CutLoopOutput:
     rounds: int
     cuts: int
     converged: bool
-    stop_reason: str
+    stop_reason: StopReason
     log: list[NLPIteration]
     cut_alpha: np.ndarray
     cut_beta: np.ndarray
     master_objective: float
     cuts_in_last_master: int
+    master: NLPMaster
 
 
 def cutting_planes(
@@ -649,9 +666,11 @@ def cutting_planes(
     on_round: Callable[[NLPIteration], None] | None = None,
     **options: Any,
 ) -> CutLoopOutput:
-    """Run the disjunctive cutting-plane loop on ``nlp`` (see the module docstring)."""
-    from .nlp import NLPIteration
+    """Run the disjunctive cutting-plane loop on ``nlp`` (see the module docstring).
 
+    ``nlp`` is read only (its public structure: rows, cost, box, terms, strategies); the
+    master the loop builds is returned in :attr:`CutLoopOutput.master`.
+    """
     if max_rounds < 1:
         raise ValidationError(f"max_rounds must be >= 1; got {max_rounds}")
     if normalization not in NORMALIZATIONS:
@@ -674,7 +693,6 @@ def cutting_planes(
     n_single = single.size
     # the master as a cvxpy model (nlp.master), updated with every round's cuts
     master = NLPMaster(master_data(c, a_all[single], b_all[single], lo, hi), n_single)
-    nlp._master, nlp._master_pending = master, None
     be.start_master(master)
     scale = nlp.scale
     # the gap is measured in the problem's units, sum(c) max|R| / (1 - lambda): an absolute
@@ -692,15 +710,18 @@ def cutting_planes(
     all_alpha: list[np.ndarray] = []
     all_beta: list[float] = []
     converged = False
-    stop = "max_rounds"
+    stop = StopReason.MAX_ROUNDS
     wbar = best
     master_obj = np.nan
     n_cuts = 0
     cuts_in_master = 0
     for rnd in range(1, max_rounds + 1):
         sol = be.solve_master()
-        if sol.status != "optimal":
-            raise SolverError(f"NLP cutting planes: master LP status {sol.status} in round {rnd}")
+        if sol.status is not Status.OPTIMAL:
+            raise SolverError(
+                f"NLP cutting planes: master LP status {sol.model_status or sol.status} in "
+                f"round {rnd}"
+            )
         assert be.master_data is not None
         wbar = np.clip(sol.x, lo, hi)
         master_obj = sol.objective
@@ -739,7 +760,7 @@ def cutting_planes(
                 cg = be.solve(
                     cglp_data(wbar, gk, hk, lo, hi, at, bt, normalization), CutGeneratingLP
                 )
-                if cg.status != "optimal" or not cg.objective < 0:
+                if cg.status is not Status.OPTIMAL or not cg.objective < 0:
                     continue
                 alpha = cg.x[:m].copy()
                 s = float(np.abs(alpha).max())
@@ -768,13 +789,15 @@ def cutting_planes(
         if on_round is not None:
             on_round(entry)
         if done:
-            converged, stop = True, "gap closed"
+            converged, stop = True, StopReason.GAP_CLOSED
             break
         if not new_a:
-            stop = "no violated disjunction" if cand.size == 0 else "no cut found (stalled)"
+            stop = (
+                StopReason.NO_VIOLATED_DISJUNCTION if cand.size == 0 else StopReason.NO_CUT_FOUND
+            )
             break
         if time_limit is not None and time.perf_counter() - t0 > time_limit:
-            stop = "time_limit"
+            stop = StopReason.TIME_LIMIT
             break
         alpha_mat = np.vstack(new_a)
         beta_vec = np.asarray(new_b)
@@ -796,4 +819,5 @@ def cutting_planes(
         cut_beta=np.asarray(all_beta),
         master_objective=master_obj,
         cuts_in_last_master=cuts_in_master,
+        master=master,
     )

@@ -34,7 +34,7 @@ residual of ``1e-13 max|R| / (1 - lambda)`` (:func:`lpbounds.dp.solve_exact`) or
 check, by the master LP ``min c'w`` over the same rows and ``l <= w <= hi`` (any LP
 solver; the point is the least element for ``c > 0``). ``w*`` satisfies every master
 row, so ``l <= l' <= w*``; the next ``l`` is the lower side of
-:func:`lpbounds.certificate.certify` (operator ``"max"``) of the master rows at the
+:func:`lpbounds.certification.certificate.certify` (operator ``"max"``) of the master rows at the
 computed point, so the rounding of the solve cannot push ``l`` above ``w*``. Floating
 point: ``amin`` is shrunk by ``4 eps`` relative (so it stays ``<= a_k`` whatever the
 rounding of duplicate sums) and the cut's right-hand side and the resolution test carry
@@ -67,14 +67,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from ..certificate import certify
-from ..dp import solve_exact
-from ..errors import SolverError, ValidationError
-from ..rows import BellmanRows
-from .nlp_cuts import LPData, NLPMaster, highs_solve
+from ...certification.certificate import certify
+from ...dp import solve_exact
+from ...errors import SolverError, ValidationError
+from ...rows import BellmanRows
+from ...status import Status
+from ...tolerances import NLP_EXACT_RTOL
+from .cuts import LPData, NLPMaster, highs_solve
+from .results import NLPIteration
+from .stop import StopReason
 
 if TYPE_CHECKING:
-    from .nlp import NLP, NLPIteration
+    from .problem import NLP
 
 __all__ = ["MASTER_BACKENDS", "MonotoneMaster", "MonotoneOutput", "MonotoneRound", "monotone_cuts"]
 
@@ -132,7 +136,13 @@ class MonotoneRound:
 
 @dataclass
 class MonotoneOutput:
-    """What :func:`monotone_cuts` hands back to :meth:`NLP.solve`."""
+    """What :func:`monotone_cuts` hands back to :meth:`NLP.solve`.
+
+    ``stop_reason`` is one of :class:`StopReason`'s ``GAP_CLOSED``, ``MAX_ROUNDS``,
+    ``TIME_LIMIT``, ``MASTER_STALLED``; ``master`` the last round's master as
+    ``(LPData, n_single, n_resolved)``, which the NLP builds into a
+    :class:`MonotoneMaster` on demand (:attr:`NLP.master`).
+    """
 
     lower: float
     upper: float
@@ -142,7 +152,7 @@ class MonotoneOutput:
     rounds: int
     cuts: int
     resolved: int
-    stop_reason: str
+    stop_reason: StopReason
     log: list[NLPIteration]
     master: tuple[LPData, int, int] | None = None
     history: list[MonotoneRound] = field(default_factory=list)
@@ -290,8 +300,10 @@ def _solve_master(
             raise SolverError(f"NLP monotone master with {solver}: status {res.status}")
         return np.asarray(res.x[:m], dtype=np.float64)
     sol = highs_solve(lp)
-    if sol.status != "optimal":
-        raise SolverError(f"NLP monotone master (highspy): status {sol.status}")
+    if sol.status is not Status.OPTIMAL:
+        raise SolverError(
+            f"NLP monotone master (highspy): status {sol.model_status or sol.status}"
+        )
     return sol.x[:m]
 
 
@@ -349,22 +361,20 @@ def monotone_cuts(
     -------
     MonotoneOutput
     """
-    from .nlp import NLPIteration
-
     if backend not in MASTER_BACKENDS:
         raise ValidationError(f"backend must be one of {MASTER_BACKENDS}; got {backend!r}")
     t0 = time.perf_counter()
     t = _Terms(nlp)
     m, c = t.m, nlp.cost
     gap_unit = gap_rtol * float(c.sum()) * nlp.scale
-    tol = 1e-13 * nlp.scale
+    tol = NLP_EXACT_RTOL * nlp.scale
     lo = nlp.certify(np.full(m, nlp.box[0])).lower
     hi = np.full(m, np.inf)
     best, best_ub = np.full(m, nlp.box[1]), np.inf
     res_row = np.full(nlp.n_disjunctions, -1, dtype=np.int64)
     v_prev = None
     log: list[NLPIteration] = []
-    stop, n_cut, last = "max_rounds", 0, None
+    stop, n_cut, last = StopReason.MAX_ROUNDS, 0, None
     for rnd in range(1, max_rounds + 1):
         q = nlp.rows.q_values(lo)
         fmin, kstar = _smallest(q, t.starts, t.d_of)
@@ -404,13 +414,13 @@ def monotone_cuts(
         if on_round is not None:
             on_round(e)
         if upper - lower <= gap_unit:
-            stop = "gap closed"
+            stop = StopReason.GAP_CLOSED
             break
         if not gain > 0 and not (resolve and new.any()):
-            stop = "stalled (the master's least element did not rise)"
+            stop = StopReason.MASTER_STALLED
             break
         if time_limit is not None and time.perf_counter() - t0 > time_limit:
-            stop = "time_limit"
+            stop = StopReason.TIME_LIMIT
             break
     master = None
     if last is not None:
