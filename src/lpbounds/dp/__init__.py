@@ -1,7 +1,7 @@
 r"""Exact dynamic programming: value, policy and modified policy iteration, policy
 evaluation, greedy policies and the Porteus bounds (paper Sections 2 and 3.3).
 
-Every function takes either a :class:`~lpbounds.mdp.FiniteMDP` or a
+Every function takes either a :class:`~lpbounds.model.mdp.FiniteMDP` or a
 :class:`~lpbounds.rows.BellmanRows` system (an MDP whose actions at ``i`` are the rows
 of ``i``), so the same code computes ``V*`` and the exact, solver-free counterparts of
 the LPs (RLP's least feasible point is the fixed point of its rows, Fact 1 in
@@ -50,7 +50,7 @@ expectations at every post-decision state), 27 and 35 against 16 and 75 (0.67 ag
 Inexact policy iteration
 ------------------------
 ``method="ipi"`` alternates an improvement sweep (greedy policy ``pi``, Bellman residual
-``res``) with a GMRES solve of ``(I - lambda P_pi) d = T u - u`` (:mod:`lpbounds._krylov`,
+``res``) with a GMRES solve of ``(I - lambda P_pi) d = T u - u`` (:mod:`lpbounds.dp.krylov`,
 self-loop preconditioned, products from the policy sweep with zero rewards) stopped at
 ``max(IPI_FORCING * res, tol / 2)`` in the max norm. The stopping rule and certificate
 are those above: the residual of the returned vector is measured by a full sweep, so the
@@ -79,14 +79,14 @@ millisecond is not worth a second default path); the measurements are rerun by
 Fast path
 ---------
 Value iteration, MPI, iterative policy evaluation and :func:`bellman_residual` on a
-:class:`~lpbounds.mdp.FiniteMDP` first look for its post-decision form
+:class:`~lpbounds.model.mdp.FiniteMDP` first look for its post-decision form
 (:class:`~lpbounds.rows.PostDecisionRows`, verified on every pair, cached on the MDP):
 where it exists (the patrol model) a sweep reads far less memory and the exact rows are
 never built. Its arithmetic is that of the rows, so the results are the same numbers;
 ``tests/test_fast_paths.py`` checks that. Pass the rows (``exact_rows(mdp)``) to force
 the plain path.
 
-Small models (fewer than :data:`lpbounds._backend.SMALL_READS` values read per sweep) run
+Small models (fewer than :data:`lpbounds._kernels.dispatch.SMALL_READS` values read per sweep) run
 on numpy twins of the compiled kernels, with the same arithmetic and the same numbers, so
 a first solve in a fresh environment compiles nothing; larger ones use the compiled
 kernels and say so on the ``lpbounds`` logger when they compile first.
@@ -114,13 +114,14 @@ from typing import Any, Literal
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import ConvergenceError, ValidationError
-from .mdp import FiniteMDP
-from .rows import BellmanRows, PostDecisionRows, SweepOperator
-from .status import Status
-from .stochastic import RowSums, bellman_margin
-from .tolerances import DP_OFFSET_ROWSUM_ATOL, DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
-from .validation import (
+from ..errors import ConvergenceError, ValidationError
+from ..model.mdp import FiniteMDP
+from ..results import Result, outward_bracket
+from ..rows import BellmanRows, PostDecisionRows, SweepOperator
+from ..status import Status
+from ..stochastic import RowSums, bellman_margin
+from ..tolerances import DP_OFFSET_ROWSUM_ATOL, DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
+from ..validation import (
     MAX_VALUE_SCALE,
     check_array,
     check_bool,
@@ -276,9 +277,13 @@ def _policy_rows(model: Model, rows: BellmanRows, policy: Any) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- results
-@dataclass
-class DPResult:
+@dataclass(repr=False)
+class DPResult(Result):
     """Outcome of :func:`solve_exact`.
+
+    A :class:`lpbounds.results.Result`: :attr:`ok`, a one-line ``repr``, ``summary()``,
+    an HTML table in Jupyter and ``to_pandas()`` (with the ``policy`` column) come from
+    there.
 
     Attributes
     ----------
@@ -312,8 +317,13 @@ class DPResult:
         are still valid, only wider).
     history : list of float
         The residual at each improvement step.
+    lower_values, upper_values : ndarray
+        The certified bracket ``lower_values <= V* <= upper_values`` (properties, see
+        :attr:`lower_values`).
+    ok : bool
+        ``status is Status.OPTIMAL`` (:attr:`lpbounds.results.Result.ok`).
     converged : bool
-        ``status is Status.OPTIMAL`` (a property: the status is the one source of truth).
+        Alias of ``ok``, kept for existing code.
     """
 
     values: np.ndarray
@@ -331,13 +341,65 @@ class DPResult:
 
     @property
     def converged(self) -> bool:
-        """True when the residual reached ``tol`` (``status is Status.OPTIMAL``)."""
-        return self.status is Status.OPTIMAL
+        """Alias of :attr:`ok`: the residual reached ``tol`` (``status is Status.OPTIMAL``)."""
+        return self.ok
+
+    @property
+    def lower_values(self) -> np.ndarray:
+        """``values - error_bound`` rounded toward ``-inf``: ``lower_values <= V*``.
+
+        Why it contains ``V*``: ``error_bound`` is a certified bound on ``||values -
+        V*||_inf`` (module docstring, "Stopping rule and error bound"), so ``values(x) -
+        error_bound <= V*(x)`` in exact arithmetic; the computed difference is the float
+        nearest the exact one, and one ``np.nextafter`` toward ``-inf`` moves it to or
+        below the exact difference, which covers the rounding of that one operation
+        (:func:`lpbounds.results.outward_bracket`). Computed on each access (a new
+        array the size of ``values``).
+        """
+        return outward_bracket(self.values, self.error_bound)[0]
+
+    @property
+    def upper_values(self) -> np.ndarray:
+        """``values + error_bound`` rounded toward ``+inf``: ``V* <= upper_values`` (the
+        mirror image of :attr:`lower_values`)."""
+        return outward_bracket(self.values, self.error_bound)[1]
+
+    # ------------------------------------------------------------------ Result hooks
+    def label(self) -> str:
+        """The method ("mpi", "vi", "pi", "ipi", "game-vi", ...)."""
+        return self.method
+
+    def summary_items(self) -> list[tuple[str, str]]:
+        """The residual against its tolerance, the sweeps and the time."""
+        return [
+            ("residual", f"||T V - V||_inf = {self.residual:.3e} (tol {self.tol:.3e})"),
+            ("sweeps", f"{self.sweeps} in all, {self.seconds:.3f} s"),
+        ]
+
+    def table_columns(self) -> dict[str, np.ndarray]:
+        """The greedy ``policy`` per state (per owner for a row system)."""
+        return {"policy": self.policy}
 
 
 @dataclass
 class PolicyEvaluation:
-    """Outcome of :func:`evaluate_policy`: ``V_pi`` with its residual and error bound."""
+    """Outcome of :func:`evaluate_policy`: ``V_pi`` with its residual and error bound.
+
+    Attributes
+    ----------
+    values : ndarray
+        ``V_pi`` up to ``error_bound``.
+    residual : float
+        ``||T_pi values - values||_inf``, measured on the returned vector.
+    error_bound : float
+        A bound on ``||values - V_pi||_inf`` (:func:`lpbounds.tolerances.error_bound`).
+    method : str
+    sweeps : int
+    seconds : float
+    lower_values, upper_values : ndarray
+        The certified bracket ``lower_values <= V_pi <= upper_values`` (properties:
+        ``values -+ error_bound`` rounded outward, as :attr:`DPResult.lower_values`).
+    """
 
     values: np.ndarray
     residual: float
@@ -345,6 +407,17 @@ class PolicyEvaluation:
     method: str
     sweeps: int
     seconds: float
+
+    @property
+    def lower_values(self) -> np.ndarray:
+        """``values - error_bound`` rounded toward ``-inf``: ``lower_values <= V_pi``
+        (why: :attr:`DPResult.lower_values`, with ``V_pi`` for ``V*``)."""
+        return outward_bracket(self.values, self.error_bound)[0]
+
+    @property
+    def upper_values(self) -> np.ndarray:
+        """``values + error_bound`` rounded toward ``+inf``: ``V_pi <= upper_values``."""
+        return outward_bracket(self.values, self.error_bound)[1]
 
 
 @dataclass
@@ -638,7 +711,6 @@ class EvalPlan:
 
 
 #: The pre-protocol private name (tests/test_dp.py imports it): remove once it uses EvalPlan.
-_EvalPlan = EvalPlan
 
 
 def _solve_post_decision(
@@ -699,9 +771,8 @@ def threads_for(ops: SweepOperator) -> Iterator[None]:
             numba.set_num_threads(before)
 
 
-#: The pre-protocol private name (lpbounds.formulations.nlp imports it): remove once it
+#: The pre-protocol private name (lpbounds.formulations.nlp.problem imports it): remove once it
 #: uses threads_for.
-_threads_for = threads_for
 
 
 def _serial_if_small(func: Callable[..., Any]) -> Callable[..., Any]:
@@ -827,7 +898,6 @@ class ThreadChoice:
 
 #: The pre-protocol private name (tests/test_fast_paths.py and benchmarks/bench_dp.py use
 #: it): remove once they use ThreadChoice.
-_ThreadChoice = ThreadChoice
 
 
 class PorteusShift:
@@ -1017,7 +1087,7 @@ def _inexact_pi(
     measured by a full improvement sweep on the returned vector, as for MPI. ``v`` is
     overwritten (the iterate).
     """
-    from ._krylov import gmres
+    from .krylov import gmres
 
     lam = ops.discount
     arg = ops.new_arg()
