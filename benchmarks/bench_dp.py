@@ -98,8 +98,8 @@ for k in sorted({1, many}):
     numba.set_num_threads(k)
     times[f"max/{k}"] = best(lambda: ps.sweep_max(v, out, arg, work=w), 15)
     times[f"policy/{k}"] = best(lambda: ps.sweep_policy(act, v, out, work=w), 15)
-    t = time.perf_counter(); ps._k().ps_expect(ps.outcomes, ps.probs, v, w)
-    times[f"expect/{k}"] = best(lambda: ps._k().ps_expect(ps.outcomes, ps.probs, v, w), 15)
+    t = time.perf_counter(); ps.kernels().ps_expect(ps.outcomes, ps.probs, v, w)
+    times[f"expect/{k}"] = best(lambda: ps.kernels().ps_expect(ps.outcomes, ps.probs, v, w), 15)
 numba.set_num_threads(many)
 solves = {}
 for name, fix in (("choice", None), ("one", 1), ("all", many)):

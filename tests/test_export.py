@@ -14,11 +14,11 @@ import pytest
 import scipy.sparse as sp
 
 import lpbounds as lb
-from lpbounds.certificate import certify
+from lpbounds.certification.certificate import certify
 from lpbounds.cli.main import main
-from lpbounds.export import EXPORT_FILES, exact_optimum, load_export, read_solution
-from lpbounds.formulations._highs import quiet_highs
-from lpbounds.study import FORMULATIONS, load_case
+from lpbounds.formulations.highs import quiet_highs
+from lpbounds.studies.compare import FORMULATIONS, load_case
+from lpbounds.studies.export import EXPORT_FILES, exact_optimum, load_export, read_solution
 
 from .conftest import reference_solve
 
@@ -332,3 +332,14 @@ def test_load_export_refuses_a_truncated_rows_file(rlp_export):
     (rlp_export / "rows.npz").write_bytes(b"PK\x03\x04 truncated")
     with pytest.raises(lb.ValidationError, match=r"rows\.npz"):
         load_export(rlp_export)
+
+
+def test_export_argument_errors_carry_data_not_options(tmp_path):
+    """The library names the argument and its value; only the command line says --format."""
+    from lpbounds.studies.export import ExportArgumentError, export_lp
+
+    with pytest.raises(ExportArgumentError) as info:
+        export_lp(GARNET, "RLP", tmp_path / "o", fmt="csv")
+    assert (info.value.argument, info.value.value) == ("fmt", "csv")
+    assert "--" not in str(info.value)
+    assert info.value.message("--format").startswith("--format 'csv': choose one of")

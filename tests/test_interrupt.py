@@ -2,17 +2,17 @@
 holds the previous complete output (checked file by file against its manifest), with no
 partial folder or lock left beside it.
 
-The process is interrupted with a real SIGINT: at the start of chosen steps (the
-``LPBOUNDS_INTERRUPT_AT`` hook makes the process signal itself there, so the point is
-exact), just after the commit's rename (through a wrapper of ``os.replace``/``os.rename``),
-and after a delay measured from the moment the run holds its lock. Once the new folder
-is renamed into place the run is committed: exit status 0 and no ``.NAME.old-*`` left."""
+The process is interrupted with a real SIGINT: at the start of chosen steps (a driver
+script adds a hook to :data:`lpbounds.patrol.reproduce.STEP_HOOKS` that makes the process
+signal itself there, so the point is exact), just after the commit's rename (through a
+wrapper of ``os.replace``/``os.rename``), and after a delay measured from the moment the
+run holds its lock. Once the new folder is renamed into place the run is committed: exit
+status 0 and no ``.NAME.old-*`` left."""
 
 from __future__ import annotations
 
 import hashlib
 import json
-import os
 import shutil
 import signal
 import subprocess
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from lpbounds.patrol.reproduce import INTERRUPT_AT_ENV, reproduce
+from lpbounds.patrol.reproduce import reproduce
 
 SMALL = "models/patrol-small.toml"
 ARGS = ["--seeds", "1", "2", "--steps", "500"]
@@ -51,14 +51,38 @@ def _assert_complete(out: Path) -> dict:
     return man
 
 
-def _run(out: Path, env_extra: dict[str, str]) -> subprocess.Popen:
-    env = {**os.environ, **env_extra}
+#: ``lpbounds`` with Ctrl-C sent to itself at the start of the step named by its first
+#: argument (a hook of ``STEP_HOOKS``), as a user's Ctrl-C at that very point would.
+AT_A_STEP = """
+import os, signal, sys, time
+
+from lpbounds.patrol import reproduce
+
+step = sys.argv.pop(1)
+
+def interrupt(name):
+    if name == step:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1.0)  # the handler runs at the next bytecode; never continue past
+
+reproduce.STEP_HOOKS.append(interrupt)
+from lpbounds.cli.main import entry
+sys.argv[0] = "lpbounds"
+entry()
+"""
+
+
+def _run(out: Path, step: str | None = None) -> subprocess.Popen:
+    """``lpbounds reproduce`` into ``out``, interrupted at the start of ``step`` if given."""
+    if step is None:
+        cmd = [sys.executable, "-m", "lpbounds.cli.main"]
+    else:
+        cmd = [sys.executable, "-c", AT_A_STEP, step]
     return subprocess.Popen(
-        [sys.executable, "-m", "lpbounds.cli.main", "reproduce", SMALL, "--out", str(out), *ARGS],
+        [*cmd, "reproduce", SMALL, "--out", str(out), *ARGS],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=env,
         # SIGINT as in a terminal, even when the suite itself runs as a background job
         # (which starts its children with SIGINT ignored)
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
@@ -78,7 +102,7 @@ def _assert_interrupted(proc: subprocess.Popen, out: Path, before: dict[str, byt
 @pytest.mark.parametrize("step", ["vstar", "figures", "write", "commit"])
 def test_interrupt_at_a_step_keeps_the_previous_output(previous, step):
     before = _snapshot(previous)
-    proc = _run(previous, {INTERRUPT_AT_ENV: step})
+    proc = _run(previous, step)
     _assert_interrupted(proc, previous, before)
 
 
@@ -87,7 +111,7 @@ def test_interrupt_after_a_delay_keeps_the_previous_output_or_completes(previous
     (if the run finished first, or the signal came after its commit) a complete new one."""
     before = _snapshot(previous)
     lock = previous.parent / f".{previous.name}.lock"
-    proc = _run(previous, {})
+    proc = _run(previous)
     t0 = time.monotonic()
     while not lock.exists() and proc.poll() is None and time.monotonic() - t0 < 300:
         time.sleep(0.02)
@@ -105,7 +129,7 @@ def test_interrupt_after_a_delay_keeps_the_previous_output_or_completes(previous
 
 def test_interrupt_without_previous_output_leaves_nothing(tmp_path):
     out = tmp_path / "fresh"
-    proc = _run(out, {INTERRUPT_AT_ENV: "figures"})
+    proc = _run(out, "figures")
     _, err = proc.communicate(timeout=600)
     assert proc.returncode == 130 and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []

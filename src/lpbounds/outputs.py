@@ -57,6 +57,7 @@ __all__ = [
     "check_output_dir",
     "check_output_file",
     "committed_outputs",
+    "file_sha256",
     "metadata_lines",
     "run_metadata",
     "write_text_atomic",
@@ -141,7 +142,7 @@ def run_metadata() -> dict[str, Any]:
     command that never touched cvxpy does not pay for it here. The HiGHS library is the
     one bundled in ``highspy`` (same version number).
     """
-    from . import __version__
+    from ._defaults import VERSION as __version__
 
     return {
         "lpbounds": __version__,
@@ -287,7 +288,19 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     return p
 
 
-def _sha256(path: Path) -> str:
+def file_sha256(path: Path) -> str:
+    """The SHA-256 hex digest of a file's bytes, read in 1 MiB blocks.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+
+    Returns
+    -------
+    str
+        64 lowercase hex digits, as recorded in manifests and provenance.
+    """
     h = hashlib.sha256()
     with path.open("rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -503,14 +516,14 @@ class AtomicDirectory:
     def manifest(self, extra: dict[str, Any] | None = None) -> dict[str, Any]:
         """Every file under the temporary folder (name, size in bytes, SHA-256) and the
         :func:`run_metadata` of the run (``environment``)."""
-        from . import __version__
+        from ._defaults import VERSION as __version__
 
         assert self.tmp is not None, "manifest() outside the with-block"
         files = [
             {
                 "name": p.relative_to(self.tmp).as_posix(),
                 "bytes": p.stat().st_size,
-                "sha256": _sha256(p),
+                "sha256": file_sha256(p),
             }
             for p in sorted(self.tmp.rglob("*"))
             if p.is_file() and p.name != MANIFEST

@@ -25,7 +25,8 @@ GREEDY_TIE_RTOL: float = 1e-12
 
 #: Default requested accuracy of an LP solve, relative to the problem's scale: a result is
 #: OPTIMAL when the Bellman residual of its returned point is at most
-#: ``LP_CERT_RTOL * max|R|``, so that its certified error (lpbounds.certificate) is at most
+#: ``LP_CERT_RTOL * max|R|``, so that its certified error (lpbounds.certification.certificate) is
+#: at most
 #: ``LP_CERT_RTOL * max|R| / (1 - lambda)`` plus the rounding allowance. Relative to the
 #: scale, never absolute, so that rewards of 1e-6 or 1e6 are judged alike. Measured at the
 #: solvers' default settings (2026-12-01): on the shipped garnet-small and patrol-small
@@ -39,7 +40,7 @@ LP_CERT_RTOL: float = 1e-6
 LP_COMPARE_RTOL: float = 1e-6
 
 #: Relative tolerance of the exact DP that computes an exported LP's optimum
-#: (:mod:`lpbounds.export`): the fixed point's Bellman residual is at most
+#: (:mod:`lpbounds.studies.export`): the fixed point's Bellman residual is at most
 #: ``EXPORT_DP_RTOL * max|R| / (1 - lambda)``. A benchmark's reference must be far more
 #: accurate than the solvers it judges (HiGHS reaches 1e-13 to 1e-11 relative on the
 #: shipped models, see LP_CERT_RTOL); 1e-12 stays several hundred times above the rounding floor
@@ -56,6 +57,36 @@ EXPORT_DP_RTOL: float = 1e-12
 #: L = 5); rows summing to ``1 +- 1e-9`` (accepted, PROBABILITY_SUM_ATOL) are not, and the
 #: DP folds the offset into the iterate every sweep instead (dp.PorteusShift).
 DP_OFFSET_ROWSUM_ATOL: float = 1e-12
+
+
+#: A partition's upper and lower bounds are reported out of order (``v*(i) - w*(i) <
+#: -BOUND_ORDER_ATOL``, against Theorems 3-4's ``w*(i) <= V*(x) <= v*(i)``) only beyond
+#: this: both are fixed points computed to ``DP_RTOL`` of the value scale (patrol values
+#: are O(1)-O(10)), so a few ulps of disagreement on a zero gap are rounding, not a defect.
+BOUND_ORDER_ATOL: float = 1e-9
+
+#: Figure 3 (:func:`lpbounds.patrol.figures.plot_ordered_states`) marks an increase of
+#: ``V*`` along a chain of ordered states (against Claim 2: ``V*`` is non-increasing in the
+#: delays) only beyond ``FIGURE_MONOTONE_RTOL * max|V*|``: ``V*`` is computed to
+#: ``DP_RTOL`` of the value scale, so smaller rises are the fixed point's residual.
+FIGURE_MONOTONE_RTOL: float = 1e-9
+
+#: Default absolute truncation error of a Monte Carlo return
+#: (:func:`lpbounds.patrol.greedy_mc.default_horizon`): paths are cut at the smallest
+#: horizon ``H`` with ``lambda^H max|R| / (1 - lambda) <= MC_TRUNCATION_TARGET``. Far below
+#: the sampling error of any feasible number of paths (standard errors of 1e-3-1e-2 on the
+#: patrol's values of order 10), so the cut never shows in a result.
+MC_TRUNCATION_TARGET: float = 1e-6
+
+#: Default tolerance of :func:`lpbounds.formulations.alp.find_cost_dependent_alp`: the ALP
+#: optimum for one cost counts as worse than the other's (Remark 2: the ALP depends on its
+#: cost) only by more than ``ALP_COST_DEPENDENCE_RTOL * max(1, |objective|)``, the accuracy
+#: an LP solve is asked for (``LP_CERT_RTOL``), so solver round-off is never taken for it.
+ALP_COST_DEPENDENCE_RTOL: float = 1e-6
+
+#: Smallest denominator of a relative quantity whose denominator may be exactly 0 (a range
+#: of values, a scale): keeps the quotient finite without changing any non-zero one.
+TINY: float = 1e-300
 
 
 def dp_scale(rewards_absmax: float, discount: float) -> float:
@@ -107,6 +138,11 @@ NLP_SWITCH_RTOL: float = 1e-12
 #: too loose for a bound that is compared with exact methods to 1e-9).
 NLP_MILP_GAP_RTOL: float = 1e-10
 
+#: The exact solves inside the NLP (a strategy's fixed point by policy iteration, the
+#: fixed point of G, the monotone master's strategy values) stop at this residual relative
+#: to ``max|R| / (1 - lambda)``: far below any gap the NLP is asked for (``NLP_GAP_RTOL``),
+#: so that their rounding, not their stopping rule, limits the certified bracket.
+NLP_EXACT_RTOL: float = 1e-13
 
 #: Multiple of machine epsilon (times ``max|V|``) added to a measured Bellman residual
 #: before it is turned into an error bound: the residual is computed in floating point,

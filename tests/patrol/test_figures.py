@@ -145,7 +145,7 @@ def captured(monkeypatch):
         figures.append(fig)
         return Path(path)
 
-    monkeypatch.setattr(figs, "_save", keep)
+    monkeypatch.setattr(figs, "save_figure", keep)
     return figures
 
 

@@ -338,7 +338,7 @@ def test_reproduce_after_a_default_highs_solve_in_the_same_process(tmp_path):
         from lpbounds.patrol.reproduce import reproduce
         rep = reproduce({SMALL!r}, {str(tmp_path / "o")!r}, seeds=(1,), n_steps=200,
                         figures=False)
-        print([b.status for b in rep.result.bounds.values()])
+        print([str(b.status) for b in rep.result.bounds.values()])
         """
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)

@@ -24,7 +24,6 @@ from rich.table import Table
 
 from ..errors import SolverError, ValidationError
 from ..outputs import run_metadata, write_text_atomic
-from ..tolerances import LP_COMPARE_RTOL
 from ._common import (
     add_model_argument,
     check_output_file,
@@ -33,10 +32,9 @@ from ._common import (
     progress,
 )
 
-WORST = 10
 
-
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``bounds`` command to ``sub`` (what ``ArgumentParser.add_subparsers`` returns)."""
     p = sub.add_parser(
         "bounds",
         help="UBLP/LBLP bounds of a patrol instance from its partitions (no state enumeration)",
@@ -60,13 +58,9 @@ def _peak_mb() -> float:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from ..dp import solve_exact
-    from ..instances import load_instance
-    from ..patrol.bounds import LBLP, UBLP, lemma3_cardinality
+    from ..model.instances import load_instance
+    from ..patrol.bounds import analyse_bounds
     from ..patrol.instance import params_from_instance
-    from ..patrol.partitions import partition_components
 
     if args.lp and args.no_lp:
         raise ValidationError("--lp and --no-lp contradict each other")
@@ -80,7 +74,6 @@ def run(args: argparse.Namespace) -> int:
         "n_partitions": params.n_partitions,
         "allow_empty_loiter": params.allow_empty_loiter,
     }
-    times: dict[str, float] = {}
     t_all = time.perf_counter()
     solve_lp = not args.no_lp and (args.lp or params.n_partitions <= args.lp_max_partitions)
     out["lp_solved"] = solve_lp
@@ -92,85 +85,23 @@ def run(args: argparse.Namespace) -> int:
     with progress() as prog:
         steps = 4 + (2 if solve_lp else 0)
         task = prog.add_task(f"bounds of {inst.name}", total=steps, status="")
-        values: dict[str, np.ndarray] = {}
-        for cls in (UBLP, LBLP):
-            prog.update(task, description=f"{cls.name}: building rows", status="")
-            t0 = time.perf_counter()
-            lp = cls(params)
-            times[f"{cls.name.lower()}_build"] = time.perf_counter() - t0
-            prog.update(task, description=f"{cls.name}: fixed point")
-            t0 = time.perf_counter()
-            fp = solve_exact(lp.rows)
-            times[f"{cls.name.lower()}_fixed_point"] = time.perf_counter() - t0
-            values[cls.name] = fp.values
-            entry: dict[str, Any] = {
-                "n_rows": lp.rows.n_rows,
-                "fixed_point": {
-                    "iterations": fp.iterations,
-                    "residual": fp.residual,
-                    "error_bound": fp.error_bound,
-                    "seconds": fp.seconds,
-                },
-            }
-            prog.advance(task)
-            if solve_lp:
-                prog.update(task, description=f"{cls.name}: LP ({args.solver})")
-                t0 = time.perf_counter()
-                res = lp.solve(args.solver)
-                times[f"{cls.name.lower()}_lp"] = time.perf_counter() - t0
-                diff = float(np.abs(res.values - fp.values).max())
-                scale = max(1.0, float(np.abs(fp.values).max()))
-                entry["lp"] = {
-                    "solver": res.solver,
-                    "status": str(res.status),
-                    "objective": res.objective,
-                    "seconds": times[f"{cls.name.lower()}_lp"],
-                    "primal_residual": res.primal_residual,
-                    "max_abs_diff_fixed_point": diff,
-                    "agrees": diff <= LP_COMPARE_RTOL * scale,
-                    "tolerance": LP_COMPARE_RTOL * scale,
-                }
-                prog.advance(task)
-            out[cls.name] = entry
-            del lp
-        prog.update(task, description="Lemma 3 cardinalities")
-        t0 = time.perf_counter()
-        out["lemma3"] = lemma3_cardinality(params).summary()
-        times["lemma3"] = time.perf_counter() - t0
-        prog.advance(task)
-        gap = values["UBLP"] - values["LBLP"]
-        comps = partition_components(params)
-        order = np.argsort(-gap)[:WORST]
-        names = ["l", "w", "d", *[f"A{j + 1}" for j in range(params.m)], "taubar"]
-        out["gap"] = {
-            "min": float(gap.min()),
-            "mean": float(gap.mean()),
-            "median": float(np.median(gap)),
-            "max": float(gap.max()),
-            "negative_count": int((gap < -1e-9).sum()),
-            "relative_to_value_range": float(
-                gap.max() / max(1e-300, values["UBLP"].max() - values["LBLP"].min())
-            ),
-            "worst": [
-                {
-                    "partition": int(i),
-                    "key": dict(zip(names, comps[i].tolist(), strict=True)),
-                    "upper": float(values["UBLP"][i]),
-                    "lower": float(values["LBLP"][i]),
-                    "gap": float(gap[i]),
-                }
-                for i in order
-            ],
-        }
-        prog.advance(task)
-    times["total"] = time.perf_counter() - t_all
-    out["seconds"] = times
+        analysis = analyse_bounds(
+            params,
+            solver=args.solver,
+            solve_lp=solve_lp,
+            step=lambda text: prog.update(task, description=text),
+            advance=lambda: prog.advance(task),
+        )
+    out.update(analysis.formulations)
+    out["lemma3"] = analysis.lemma3
+    out["gap"] = analysis.gap
+    out["seconds"] = {**analysis.seconds, "total": time.perf_counter() - t_all}
     out["peak_rss_mb"] = _peak_mb()
     _print(out, params)
     if args.json:
         write_text_atomic(args.json, json.dumps({**out, "environment": run_metadata()}, indent=2))
-    bad = [k for k in ("UBLP", "LBLP") if "lp" in out[k] and not out[k]["lp"]["agrees"]]
-    if out["gap"]["negative_count"]:
+    bad = analysis.lp_disagreements
+    if analysis.negative_count:
         console.print("[red]the lower bound exceeds the upper bound somewhere[/red]")
         return 1
     if bad:

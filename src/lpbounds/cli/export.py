@@ -1,5 +1,5 @@
 """``lpbounds export MODEL --formulation NAME --out DIR``: a Bellman-row LP with its exact
-optimum, for solvers outside lpbounds (see :mod:`lpbounds.export`)."""
+optimum, for solvers outside lpbounds (see :mod:`lpbounds.studies.export`)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ from typing import Any
 from rich.table import Table
 from rich.text import Text
 
-from ._common import add_model_argument, print_table, progress
+from ..errors import ValidationError
+from ._common import add_model_argument, check_output_dir, print_table, progress
 
 EXAMPLES = """\
 examples (sizes: rows x columns; times on 2 cores):
@@ -30,7 +31,8 @@ sizes and times.
 """
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``export`` command to ``sub`` (what ``ArgumentParser.add_subparsers`` returns)."""
     p = sub.add_parser(
         "export",
         help="write a Bellman-row LP (MPS/LP) with its exact optimum, for any LP solver",
@@ -70,7 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 def _command(args: argparse.Namespace) -> str:
     """The command line that reproduces this export (recorded in the provenance)."""
-    from ..export import command_line
+    from ..studies.export import command_line
 
     argv = ["lpbounds", "export", args.model, "--formulation", args.formulation]
     if args.partition is not None:
@@ -78,24 +80,33 @@ def _command(args: argparse.Namespace) -> str:
     return command_line([*argv, "--format", args.fmt, "--out", args.out])
 
 
-def run(args: argparse.Namespace) -> int:
-    from ..export import export_lp
+#: The option of each argument of :func:`lpbounds.studies.export.export_lp` that the
+#: command line takes from the user
+_FLAGS = {"formulation": "--formulation", "partition": "--partition", "fmt": "--format"}
 
+
+def run(args: argparse.Namespace) -> int:
+    from ..studies.export import EXPORT_FILES, ExportArgumentError, export_lp
+
+    check_output_dir(args.out, "--out", replaceable=EXPORT_FILES)
     with progress() as prog:
         task = prog.add_task(f"export of {args.model}", total=None, status="")
 
         def step(text: str) -> None:
             prog.update(task, description=text)
 
-        result = export_lp(
-            args.model,
-            args.formulation,
-            args.out,
-            partition=args.partition,
-            fmt=args.fmt,
-            command=_command(args),
-            step=step,
-        )
+        try:
+            result = export_lp(
+                args.model,
+                args.formulation,
+                args.out,
+                partition=args.partition,
+                fmt=args.fmt,
+                command=_command(args),
+                step=step,
+            )
+        except ExportArgumentError as exc:
+            raise ValidationError(exc.message(_FLAGS[exc.argument])) from exc
     print_table(_table(result))
     return 0
 

@@ -16,7 +16,8 @@ from .._defaults import DEFAULT_MODEL, DEFAULT_OUT, DEFAULT_SEEDS
 from ._common import add_model_argument, console, nonnegative_int, positive_int, progress
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``reproduce`` command to ``sub`` (what ``ArgumentParser.add_subparsers`` returns)."""
     p = sub.add_parser(
         "reproduce",
         help="reproduce the paper's patrol results (Sections 4-6): report, figures, data",

@@ -21,11 +21,12 @@ import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
-from ..certificate import Certificate, certify
+from ..certification.certificate import Certificate, certify
 from ..dp import exact_rows
 from ..errors import ValidationError
-from ..mdp import FiniteMDP
-from ..validation import check_formulation_inputs
+from ..model.checks import check_formulation_inputs
+from ..model.mdp import FiniteMDP
+from ..tolerances import ALP_COST_DEPENDENCE_RTOL
 from .base import Formulation, LPResult, check_cost
 
 __all__ = ["ALP", "CostDependenceExample", "find_cost_dependent_alp", "soft_aggregation_basis"]
@@ -100,7 +101,8 @@ class ALP(Formulation):
     is on ``V*`` itself, per state: ``upper_values = Phi r + max(0, max(T(Phi r) - Phi r))
     / (1 - lambda)`` (rounded up) is a certified upper bound on ``V*`` whatever the solver
     returned (a feasible ``Phi r`` is its own bound, up to rounding), and ``lower_values``
-    the matching lower bound from :func:`lpbounds.certificate.certify`. The status judges
+    the matching lower bound from :func:`lpbounds.certification.certificate.certify`. The status
+    judges
     only the upper side: OPTIMAL when ``upper_values`` is within ``accuracy`` (relative to
     ``max|R| / (1 - lambda)``) of ``Phi r``.
     """
@@ -146,7 +148,9 @@ class ALP(Formulation):
         """The cvxpy variable ``r`` (one weight per basis column)."""
         return self.variables["r"]
 
-    def _interpret(self, x: np.ndarray, y: np.ndarray):  # type: ignore[override]
+    def _interpret(
+        self, x: np.ndarray, y: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         return x, np.asarray(self.basis @ x).ravel(), self.rows.pair_values(y), {}
 
     def _certify(self, x: np.ndarray) -> Certificate:
@@ -201,14 +205,15 @@ def find_cost_dependent_alp(
     n_actions: int = 2,
     n_features: int = 2,
     solver: str = "HIGHS",
-    rtol: float = 1e-6,
+    rtol: float = ALP_COST_DEPENDENCE_RTOL,
 ) -> CostDependenceExample:
     """Search seeded small random MDPs and soft-aggregation bases for cost dependence.
 
     Try ``seed, seed + 1, ...``: a Garnet MDP, a random soft-aggregation basis and two
     positive random costs; return the first instance where the optimum for ``cost2``
     is worse than the optimum for ``cost1`` under ``cost1`` by more than
-    ``rtol * max(1, |cost1' Phi r1|)``.
+    ``rtol * max(1, |cost1' Phi r1|)`` (default
+    :data:`lpbounds.tolerances.ALP_COST_DEPENDENCE_RTOL`).
 
     Raises
     ------
@@ -216,7 +221,7 @@ def find_cost_dependent_alp(
         If ``max_tries`` instances show no dependence (never observed for the defaults).
     """
     from ..errors import LPBoundsError
-    from ..generators import garnet
+    from ..model.generators import garnet
 
     for k in range(max_tries):
         s = seed + k

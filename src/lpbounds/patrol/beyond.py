@@ -14,7 +14,7 @@ At each size :func:`study` measures, over every state ``x`` of partition ``i``:
   and ``max(V* - V_sub)`` with ``V_sub`` its value (matrix-free policy evaluation);
 * the sandwich checks ``V* <= v*``, ``w* <= V*`` and ``w* <= V_sub <= V*`` as verdicts
   (:class:`~lpbounds.status.Verdict`) from certified intervals, as
-  :func:`lpbounds.checks.compare_at_least` decides them.
+  :func:`lpbounds.certification.checks.compare_at_least` decides them.
 
 The statistics are reduced inside compiled passes (no state-sized temporaries): at 6
 stations a float64 vector over the states is 4.3 GB, and the whole study keeps at most
@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from ..checks import compare_at_least
+from ..certification.checks import compare_at_least
 from ..status import Status, Verdict
 from ..tolerances import GREEDY_TIE_RTOL, error_bound
 from .matrix_free import MatrixFreePatrol, check_finite, evaluate_policy, solve_vstar
@@ -65,7 +65,7 @@ class Check:
 
     With the intervals ``a +- err_a`` and ``b +- err_b`` of uniform width, the verdict over
     all states is the one at the state where ``a - b`` is smallest (``state``), which
-    :func:`lpbounds.checks.compare_at_least` decides: *holds* proves
+    :func:`lpbounds.certification.checks.compare_at_least` decides: *holds* proves
     ``a >= b - accuracy`` at every state, *violated* proves ``a < b`` somewhere,
     *inconclusive* is neither. The bounds' claims (``V* <= v*``, ``w* <= V*``,
     ``w* <= V_sub``) are checked with accuracy 0 (holds = proven); ``V_sub <= V*`` with
@@ -75,8 +75,9 @@ class Check:
     Attributes
     ----------
     claim : str
-    verdict : str
-        ``holds``, ``violated`` or ``inconclusive``.
+    verdict : Verdict
+        ``holds``, ``violated`` or ``inconclusive`` (a ``str`` enum: it compares equal to,
+        prints and serialises as its value; a string given is converted).
     margin : float
         ``min(a - b) - err_a - err_b``: positive proves the claim everywhere.
     min_difference : float
@@ -90,12 +91,15 @@ class Check:
     """
 
     claim: str
-    verdict: str
+    verdict: Verdict
     margin: float
     min_difference: float
     state: int
     errors: float
     accuracy: float = 0.0
+
+    def __post_init__(self) -> None:
+        self.verdict = Verdict(self.verdict)
 
 
 def certified_check(
@@ -112,7 +116,7 @@ def certified_check(
     cmp = compare_at_least(a_at - err_a, a_at + err_a, b_at - err_b, b_at + err_b, accuracy)
     return Check(
         claim=claim,
-        verdict=str(cmp.verdict),
+        verdict=cmp.verdict,
         margin=float(min_diff - err_a - err_b),
         min_difference=float(min_diff),
         state=int(state),
@@ -149,7 +153,7 @@ class SizeResult:
     @property
     def all_hold(self) -> bool:
         """Every certified check holds."""
-        return all(c.verdict == str(Verdict.HOLDS) for c in self.checks.values())
+        return all(c.verdict is Verdict.HOLDS for c in self.checks.values())
 
 
 def save_result(res: SizeResult, path: str | Path) -> Path:
@@ -228,7 +232,7 @@ def _vstar_summary(sol: Any, vstar: np.ndarray) -> dict[str, Any]:
         "residual": float(sol.residual),
         "error_bound": float(sol.error_bound),
         "tol": float(sol.tol),
-        "status": str(sol.status),
+        "status": sol.status,
         "seconds": float(sol.seconds),
         "min": float(vstar.min()),
         "max": float(vstar.max()),
@@ -568,7 +572,7 @@ MC_MODELS: tuple[str, ...] = ("patrol-m6-paper", "patrol-m8")
 
 
 def _load_params(name: str) -> PatrolParams:
-    from ..instances import load_instance
+    from ..model.instances import load_instance
     from .instance import params_from_instance
 
     return params_from_instance(load_instance(name))
@@ -695,7 +699,7 @@ def plot_gap_shares(rows: list[SizeResult], path: str | Path) -> Path:
     against the number of states."""
     from matplotlib.ticker import NullLocator
 
-    from .figures import _save, plt
+    from .figures import plt, save_figure
 
     n = [r.n_states for r in rows]
     ticks = [f"{r.n_states:.2g}\nm = {r.m}" for r in rows]
@@ -722,7 +726,7 @@ def plot_gap_shares(rows: list[SizeResult], path: str | Path) -> Path:
     sizes = ", ".join(str(r.m) for r in rows)
     fig.suptitle(f"Who owns the gap between the bounds: {sizes} stations")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _gap_rows(rows: list[SizeResult]) -> list[list[Any]]:
@@ -811,9 +815,10 @@ def report_section(
         )
         + "\n",
         f"**What the gap shares say.** {tighter_side(rows)}\n",
-        "Certified checks at every state (verdicts of `lpbounds.checks.compare_at_least` at "
-        "the tightest state, from V*'s, the bounds' and V_sub's certified error bounds; "
-        "margin = smallest difference less the errors):\n",
+        "Certified checks at every state (verdicts of "
+        "`lpbounds.certification.checks.compare_at_least` at the tightest state, from V*'s, the "
+        "bounds' and V_sub's certified error bounds; margin = smallest difference less the "
+        "errors):\n",
         markdown_table(
             ["m", *[c.claim for c in rows[0].checks.values()]],
             [[r.m, *[f"{c.verdict} ({c.margin:.2e})" for c in r.checks.values()]] for r in rows],

@@ -27,7 +27,9 @@ No state is enumerated: the rows are built from the ``M`` keys, vectorised, so
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import cvxpy as cp
@@ -36,14 +38,17 @@ import numpy as np
 from ..errors import ValidationError
 from ..formulations.rows_lp import RowsLP
 from ..rows import BellmanRows
+from ..tolerances import BOUND_ORDER_ATOL, LP_COMPARE_RTOL, TINY
 from .params import PatrolParams
-from .partitions import decode_partition, partition_index
+from .partitions import decode_partition, partition_components, partition_index
 
 __all__ = [
     "LBLP",
     "UBLP",
+    "BoundsAnalysis",
     "Lemma3Cardinality",
     "PartitionKeys",
+    "analyse_bounds",
     "lemma3_cardinality",
     "partition_keys",
     "patrol_rows",
@@ -333,3 +338,158 @@ class LBLP(_PatrolLP):
 
     name = "LBLP"
     kind: Kind = "lower"
+
+
+# ---------------------------------------------------------------------- the bounds' analysis
+#: Number of partitions with the largest gaps that :func:`analyse_bounds` lists.
+WORST_GAPS = 10
+
+
+@dataclass
+class BoundsAnalysis:
+    """UBLP and LBLP of a patrol instance, their gap and Lemma 3, as report data.
+
+    Attributes
+    ----------
+    formulations : dict
+        ``"UBLP"`` and ``"LBLP"`` -> ``{"n_rows", "fixed_point": {...}, "lp": {...}}`` (``lp``
+        only when the LPs were solved): the fixed point's iterations, residual, error bound
+        and seconds; the LP's solver, status, objective, seconds, primal residual, largest
+        distance to the fixed point, whether it agrees within ``tolerance``
+        (``LP_COMPARE_RTOL * max(1, max|v_fp|)``).
+    lemma3 : dict
+        :meth:`Lemma3Cardinality.summary`.
+    gap : dict
+        ``v*(i) - w*(i)`` over the partitions: min, mean, median, max, ``negative_count``
+        (partitions where it is below ``-BOUND_ORDER_ATOL``), its max relative to the
+        range of the values, and the ``WORST_GAPS`` largest (``worst``: partition, key,
+        upper, lower, gap).
+    seconds : dict
+        Time of each step.
+    """
+
+    formulations: dict[str, dict[str, Any]]
+    lemma3: dict[str, Any]
+    gap: dict[str, Any]
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def negative_count(self) -> int:
+        """Partitions whose lower bound exceeds the upper bound (0 unless a defect)."""
+        return int(self.gap["negative_count"])
+
+    @property
+    def lp_disagreements(self) -> list[str]:
+        """The formulations whose LP optimum differs from the fixed point."""
+        return [k for k, e in self.formulations.items() if "lp" in e and not e["lp"]["agrees"]]
+
+
+def analyse_bounds(
+    params: PatrolParams,
+    *,
+    solver: str = "HIGHS",
+    solve_lp: bool = True,
+    step: Callable[[str], None] | None = None,
+    advance: Callable[[], None] | None = None,
+) -> BoundsAnalysis:
+    """UBLP and LBLP of ``params`` (fixed points, optionally LPs), their gap and Lemma 3.
+
+    Each formulation is solved as a solver-free fixed point (its exact LP optimum) and,
+    with ``solve_lp``, as an LP with ``solver``, cross-checked against the fixed point;
+    then Lemma 3's cardinalities and the policy-free gap ``v*(i) - w*(i)`` per partition.
+
+    Parameters
+    ----------
+    params : PatrolParams
+        The instance.
+    solver : str
+        cvxpy solver of the LPs.
+    solve_lp : bool
+        Solve the LPs too (the fixed points are always computed).
+    step : callable(str), optional
+        Called with a description as each step starts (progress display).
+    advance : callable(), optional
+        Called as each counted step ends: ``4 + (2 if solve_lp else 0)`` calls in all.
+
+    Returns
+    -------
+    BoundsAnalysis
+    """
+    from ..dp import solve_exact
+
+    say = step or (lambda _s: None)
+    done = advance or (lambda: None)
+    times: dict[str, float] = {}
+    entries: dict[str, dict[str, Any]] = {}
+    values: dict[str, np.ndarray] = {}
+    for cls in (UBLP, LBLP):
+        say(f"{cls.name}: building rows")
+        t0 = time.perf_counter()
+        lp = cls(params)
+        times[f"{cls.name.lower()}_build"] = time.perf_counter() - t0
+        say(f"{cls.name}: fixed point")
+        t0 = time.perf_counter()
+        fp = solve_exact(lp.rows)
+        times[f"{cls.name.lower()}_fixed_point"] = time.perf_counter() - t0
+        values[cls.name] = fp.values
+        entry: dict[str, Any] = {
+            "n_rows": lp.rows.n_rows,
+            "fixed_point": {
+                "iterations": fp.iterations,
+                "residual": fp.residual,
+                "error_bound": fp.error_bound,
+                "seconds": fp.seconds,
+            },
+        }
+        done()
+        if solve_lp:
+            say(f"{cls.name}: LP ({solver})")
+            t0 = time.perf_counter()
+            res = lp.solve(solver)
+            times[f"{cls.name.lower()}_lp"] = time.perf_counter() - t0
+            diff = float(np.abs(res.values - fp.values).max())
+            scale = max(1.0, float(np.abs(fp.values).max()))
+            entry["lp"] = {
+                "solver": res.solver,
+                "status": res.status,
+                "objective": res.objective,
+                "seconds": times[f"{cls.name.lower()}_lp"],
+                "primal_residual": res.primal_residual,
+                "max_abs_diff_fixed_point": diff,
+                "agrees": diff <= LP_COMPARE_RTOL * scale,
+                "tolerance": LP_COMPARE_RTOL * scale,
+            }
+            done()
+        entries[cls.name] = entry
+        del lp
+    say("Lemma 3 cardinalities")
+    t0 = time.perf_counter()
+    lemma3 = lemma3_cardinality(params).summary()
+    times["lemma3"] = time.perf_counter() - t0
+    done()
+    gap = values["UBLP"] - values["LBLP"]
+    comps = partition_components(params)
+    order = np.argsort(-gap)[:WORST_GAPS]
+    names = ["l", "w", "d", *[f"A{j + 1}" for j in range(params.m)], "taubar"]
+    gaps = {
+        "min": float(gap.min()),
+        "mean": float(gap.mean()),
+        "median": float(np.median(gap)),
+        "max": float(gap.max()),
+        "negative_count": int((gap < -BOUND_ORDER_ATOL).sum()),
+        "relative_to_value_range": float(
+            gap.max() / max(TINY, values["UBLP"].max() - values["LBLP"].min())
+        ),
+        "worst": [
+            {
+                "partition": int(i),
+                "key": dict(zip(names, comps[i].tolist(), strict=True)),
+                "upper": float(values["UBLP"][i]),
+                "lower": float(values["LBLP"][i]),
+                "gap": float(gap[i]),
+            }
+            for i in order
+        ],
+    }
+    done()
+    return BoundsAnalysis(entries, lemma3, gaps, times)

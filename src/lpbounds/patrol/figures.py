@@ -32,6 +32,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from ..tolerances import FIGURE_MONOTONE_RTOL
+
 __all__ = [
     "ordered_delays",
     "plot_bounds",
@@ -40,6 +42,7 @@ __all__ = [
     "plot_min_value_partitions",
     "plot_ordered_states",
     "plot_vsub",
+    "save_figure",
     "select_bounds_partitions",
     "select_min_value_partitions",
     "select_ordered_states",
@@ -48,7 +51,24 @@ __all__ = [
 _DPI = 130
 
 
-def _save(fig: Any, path: str | Path) -> Path:
+def save_figure(fig: Any, path: str | Path) -> Path:
+    """Write ``fig`` as a PNG at ``path`` (parents created) and close it.
+
+    The one way every figure of the patrol (here and :mod:`lpbounds.patrol.beyond`) is
+    written, at the same resolution.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or pathlib.Path
+        Where to write it.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(p, dpi=_DPI)
@@ -70,7 +90,7 @@ def plot_information(params: Any, path: str | Path) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 # ---------------------------------------------------------------------- Figure 3
@@ -119,7 +139,7 @@ def plot_ordered_states(
     markers = "osD^v<>px*"
     taubar = np.zeros(0, dtype=np.int64)
     # an increase beyond rounding would contradict Claim 2: marked, and the title says so
-    slack = 1e-9 * float(np.abs(vstar).max(initial=0.0))
+    slack = FIGURE_MONOTONE_RTOL * float(np.abs(vstar).max(initial=0.0))
     n_up = 0
     for k, (s, idx) in enumerate(sel.items()):
         y = vstar[idx]
@@ -174,7 +194,7 @@ def plot_ordered_states(
     ax.grid(alpha=0.25, axis="y")
     ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 # ---------------------------------------------------------------------- Figure 4
@@ -249,7 +269,7 @@ def plot_min_value_partitions(
     )
     ax.legend(loc="lower left", fontsize=8)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 # ---------------------------------------------------------------------- Figure 5
@@ -310,7 +330,7 @@ def plot_bounds(
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 # ---------------------------------------------------------------------- Figure 6
@@ -353,7 +373,7 @@ def plot_vsub(
             a_.axvline(b, color="grey", ls=":", lw=0.5)
         a_.grid(alpha=0.2)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 # ---------------------------------------------------------------------- Figure 7
@@ -394,4 +414,4 @@ def plot_histograms(
     ax2.grid(alpha=0.3, axis="y")
     fig.suptitle("Figure 7: service delay and loiters, optimal vs sub-optimal policy")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)

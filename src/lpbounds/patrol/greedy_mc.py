@@ -7,8 +7,8 @@ with respect to the lower bound ``w*`` lifted to states (``V_low(x) = w*(i(x))``
 eq. 30), one state at a time:
 
 * the successors of a state come from the model's own compiled dynamics
-  (``lpbounds.patrol.model._successor_kernel``), their components from its decoder
-  (``_decode_kernel``) and their partitions from the compiled key index of
+  (``lpbounds.patrol.model.successor_kernel``), their components from its decoder
+  (``decode_kernel``) and their partitions from the compiled key index of
   :mod:`lpbounds.patrol.partitions` (``alert_key_kernel``, ``key_index_kernel``);
 * ``Q(x, u) = R_u(x) + lambda sum_l p_l w*(i(f(x, u, Y_l)))`` is summed in outcome
   order exactly as :func:`lpbounds.dp.greedy_policy` sums it, and the action is chosen
@@ -74,11 +74,11 @@ from scipy import stats
 from .._defaults import DEFAULT_SEEDS
 from ..dp import solve_exact
 from ..errors import ConsistencyError, ValidationError
-from ..mdp import FiniteMDP
-from ..tolerances import GREEDY_TIE_RTOL
+from ..model.mdp import FiniteMDP
+from ..tolerances import GREEDY_TIE_RTOL, MC_TRUNCATION_TARGET
 from ..validation import check_bool, check_int, check_real, check_vector
 from .bounds import patrol_rows
-from .model import ACTION_NAMES, PatrolModel, _decode_kernel, _successor_kernel
+from .model import ACTION_NAMES, PatrolModel, decode_kernel, successor_kernel
 from .params import PatrolParams
 from .partitions import alert_key_kernel, block_sizes, key_index_kernel
 from .simulation import SimulationResult, alert_sequence, pooled_statistics, simulate
@@ -100,8 +100,9 @@ __all__ = [
     "truncation_bound",
 ]
 
-#: Default truncation error: the horizon is the smallest with ``trunc <= TRUNCATION_TARGET``.
-TRUNCATION_TARGET = 1e-6
+#: Default truncation error: the horizon is the smallest with ``trunc <= TRUNCATION_TARGET``
+#: (:data:`lpbounds.tolerances.MC_TRUNCATION_TARGET`, where its reason is).
+TRUNCATION_TARGET = MC_TRUNCATION_TARGET
 
 
 # ---------------------------------------------------------------------- bounds
@@ -215,7 +216,7 @@ def _decode_one(x, a, mt, buf):  # pragma: no cover - compiled
     cfg, stations = mt[0], mt[2]
     tau, succ, nl, nw, nd, ntau = buf[1], buf[2], buf[3], buf[4], buf[5], buf[6]
     succ[a, 0, 0] = x
-    _decode_kernel(
+    decode_kernel(
         succ[a, 0, :1], cfg[4], cfg[3], tau.shape[1], cfg[1], stations, nl[a : a + 1],
         nw[a : a + 1], nd[a : a + 1], ntau[a],
     )  # fmt: skip
@@ -234,7 +235,7 @@ def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
     :func:`lpbounds.dp.greedy_policy` sums it; fills the action's successor slots.
 
     Only the no-alert successor is decoded: by the model's encoding
-    (``_successor_kernel``), the successor under outcome ``y >= 1`` has another index
+    (``successor_kernel``), the successor under outcome ``y >= 1`` has another index
     exactly when the alert at station ``y - 1`` is new (``tau' = 1``, so ``A' = 1`` and
     ``taubar' = max(taubar, 1)``), and is the no-alert successor otherwise.
     """
@@ -242,7 +243,7 @@ def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
     cur, tau, succ, nl, nw, nd, ntau, _, wn, ev = buf
     m = tau.shape[1]
     n_nodes, big_d, gamma, radix, n_travel = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
-    _successor_kernel(
+    successor_kernel(
         cur[0:1], cur[1:2], cur[2:3], tau, a, n_nodes, big_d, gamma, radix, n_travel,
         station_pos, w_travel, w_loiter, succ[a],
     )  # fmt: skip

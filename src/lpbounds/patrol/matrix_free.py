@@ -6,7 +6,7 @@ those arrays alone would take about 32 GB. The sweeps here store nothing per sta
 the value vectors: each state's components, its successors, its rewards and (for the
 bounds) its partition are computed from the state index inside compiled kernels, a block
 of states at a time, with the model's own encoding and dynamics
-(``model._decode_kernel``, ``model._successor_kernel``) and partitions
+(``model.decode_kernel``, ``model.successor_kernel``) and partitions
 (:func:`lpbounds.patrol.partitions.state_partition_kernel`). A block is decoded by rows of
 ``Gamma + 1`` consecutive states, which differ in one delay only (:func:`_decode_rows`).
 
@@ -54,7 +54,7 @@ from ..rows import PolicySweeps
 from ..stochastic import RowSums, row_sums
 from ..tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
 from ..validation import check_int
-from .model import PatrolModel, _decode_kernel, _successor_kernel
+from .model import PatrolModel, decode_kernel, successor_kernel
 from .params import PatrolParams
 from .partitions import block_sizes, state_partition_kernel
 
@@ -95,7 +95,7 @@ def _decode_rows(start, nb, geo, stations, ints, tau, ctau):  # pragma: no cover
     The encoding is mixed radix with a delay as its last digit (:mod:`.model`), so the
     ``Gamma + 1`` consecutive states of a *row* (``start`` and ``nb`` are multiples of the
     row length ``geo[_ROW]``) share every component but that delay, which runs 0, 1, ...
-    along the row. ``model._decode_kernel`` decodes the first two states of each row
+    along the row. ``model.decode_kernel`` decodes the first two states of each row
     (where they differ is the delay that runs) and the rest of the row is copied: 8-15
     times fewer integer divisions than decoding every state. Uses ``ints[0]`` and
     ``ints[5:8]``, ``ctau`` as scratch.
@@ -106,7 +106,7 @@ def _decode_rows(start, nb, geo, stations, ints, tau, ctau):  # pragma: no cover
     if big_r == 1:
         for i in range(nb):
             xs[i] = start + i
-        _decode_kernel(
+        decode_kernel(
             xs[:nb],
             geo[_NTRAVEL],
             geo[_RADIX],
@@ -123,7 +123,7 @@ def _decode_rows(start, nb, geo, stations, ints, tau, ctau):  # pragma: no cover
     for q in range(n2):  # the first two states of each row
         xs[q] = start + (q // 2) * big_r + q % 2
     l2, w2, d2 = ints[5], ints[6], ints[7]
-    _decode_kernel(
+    decode_kernel(
         xs[:n2],
         geo[_NTRAVEL],
         geo[_RADIX],
@@ -153,8 +153,8 @@ def _decode_rows(start, nb, geo, stations, ints, tau, ctau):  # pragma: no cover
 
 @njit(**_OPTS)
 def _successors(geo, sp, wt, wl, ints, tau, nb, action, out):  # pragma: no cover
-    """``model._successor_kernel`` on buffer rows ``0 .. nb - 1`` into ``out[:nb]``."""
-    _successor_kernel(
+    """``model.successor_kernel`` on buffer rows ``0 .. nb - 1`` into ``out[:nb]``."""
+    successor_kernel(
         ints[1][:nb],
         ints[2][:nb],
         ints[3][:nb],
@@ -174,7 +174,7 @@ def _successors(geo, sp, wt, wl, ints, tau, nb, action, out):  # pragma: no cove
 
 @njit(**_OPTS)
 def _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, action, out):  # pragma: no cover
-    """``model._successor_kernel`` on the ``ns`` buffer rows listed in ``ints[4]`` (copied
+    """``model.successor_kernel`` on the ``ns`` buffer rows listed in ``ints[4]`` (copied
     together first: the kernel takes arrays) into ``out[:ns]``."""
     sel, cl, cw, cd = ints[4], ints[5], ints[6], ints[7]
     l, w, d = ints[1], ints[2], ints[3]
@@ -185,7 +185,7 @@ def _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, action, out):  # pragma
         cd[q] = d[i]
         for j in range(tau.shape[1]):
             ctau[q, j] = tau[i, j]
-    _successor_kernel(
+    successor_kernel(
         cl[:ns],
         cw[:ns],
         cd[:ns],
@@ -678,7 +678,7 @@ class MatrixFreePatrol:
     @staticmethod
     def nchunks() -> int:
         """Work chunks per sweep (a few per numba thread)."""
-        from .._backend import nchunks
+        from .._kernels.dispatch import nchunks
 
         return nchunks()
 

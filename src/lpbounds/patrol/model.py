@@ -39,13 +39,13 @@ import numba
 import numpy as np
 
 from ..errors import ValidationError
-from ..mdp import FiniteMDP
-from ..partition import Partition
+from ..model.mdp import FiniteMDP
+from ..model.partition import Partition
 from .params import PatrolParams
 from .partitions import partition_components as _partition_components
 from .partitions import partition_index as _partition_index
 
-__all__ = ["ACTION_NAMES", "ACTION_U", "PatrolModel"]
+__all__ = ["ACTION_NAMES", "ACTION_U", "PatrolModel", "decode_kernel", "successor_kernel"]
 
 #: Action names in index order.
 ACTION_NAMES: tuple[str, str, str] = ("continue", "reverse", "loiter")
@@ -56,7 +56,32 @@ _TAU = np.int16  # delays fit: Gamma <= params.GAMMA_MAX
 
 
 @numba.njit(cache=True)
-def _decode_kernel(x, n_travel, radix, m, n_big_d, stations, l, w, d, tau):  # pragma: no cover
+def decode_kernel(x, n_travel, radix, m, n_big_d, stations, l, w, d, tau):  # pragma: no cover
+    """Decode state indices ``x`` into their components, in place (compiled).
+
+    The model's encoding, shared with the matrix-free sweeps
+    (:mod:`lpbounds.patrol.matrix_free`) and the greedy simulation
+    (:mod:`lpbounds.patrol.greedy_mc`), which decode states without building the model.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        State indices (int64).
+    n_travel : int
+        Number of travelling states (``2 N radix**m``); indices from it on are loiters.
+    radix : int
+        ``Gamma + 1``.
+    m : int
+        Number of stations.
+    n_big_d : int
+        ``D``, the largest dwell.
+    stations : numpy.ndarray
+        Node of each station.
+    l, w, d : numpy.ndarray
+        Outputs, one entry per state: location, heading (+1 / -1), dwell.
+    tau : numpy.ndarray
+        Output, shape ``(x.size, m)``: the delays.
+    """
     rm = radix**m
     rm1 = radix ** (m - 1)
     for i in range(x.size):
@@ -86,7 +111,7 @@ def _decode_kernel(x, n_travel, radix, m, n_big_d, stations, l, w, d, tau):  # p
 
 
 @numba.njit(cache=True)
-def _successor_kernel(
+def successor_kernel(
     l,
     w,
     d,
@@ -102,6 +127,28 @@ def _successor_kernel(
     w_loiter,
     out,
 ):  # pragma: no cover
+    """Successor indices of decoded states under one action, into ``out`` (compiled).
+
+    The model's dynamics, shared with :mod:`lpbounds.patrol.matrix_free` and
+    :mod:`lpbounds.patrol.greedy_mc`. Row ``i`` of ``out`` (shape ``(l.size, m + 1)``)
+    holds the successor with no new alert (column 0) and with an alert at station ``j``
+    (column ``j + 1``).
+
+    Parameters
+    ----------
+    l, w, d, tau : numpy.ndarray
+        Decoded states (:func:`decode_kernel`).
+    action : int
+        Action index (0 continue, 1 reverse, 2 loiter).
+    n_nodes, n_big_d, gamma, radix, n_travel : int
+        The encoding's sizes: nodes ``N``, ``D``, ``Gamma``, ``Gamma + 1``, travelling states.
+    station_pos : numpy.ndarray
+        Station number of each node (where the UAV loiters).
+    w_travel, w_loiter : numpy.ndarray
+        Index weights of the delays in travelling and loitering states.
+    out : numpy.ndarray
+        Output, int64.
+    """
     m = tau.shape[1]
     rm = radix**m
     rm1 = radix ** (m - 1)
@@ -249,7 +296,7 @@ class PatrolModel:
         w = np.empty(x.size, dtype=np.int64)
         d = np.empty(x.size, dtype=np.int64)
         tau = np.empty((x.size, self.m), dtype=_TAU)
-        _decode_kernel(
+        decode_kernel(
             x, self.n_travel, self.radix, self.m, self.params.D, self.stations, l, w, d, tau
         )
         return l, w, d, tau
@@ -294,7 +341,7 @@ class PatrolModel:
             if (k < 0).any() or (d >= p.D).any():
                 raise ValidationError("loiter is not allowed at some of the given states")
         out = np.empty((l.size, self.m + 1), dtype=np.int64)
-        _successor_kernel(
+        successor_kernel(
             l,
             np.ascontiguousarray(w, dtype=np.int64),
             np.ascontiguousarray(d, dtype=np.int64),

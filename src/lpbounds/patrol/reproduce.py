@@ -38,9 +38,8 @@ from __future__ import annotations
 import json
 import os
 import platform
-import signal
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,7 +51,7 @@ from .._defaults import DEFAULT_MODEL, DEFAULT_OUT, DEFAULT_SEEDS
 from ..dp import evaluate_policy, exact_rows, greedy_policy, solve_exact, solve_game
 from ..errors import ConsistencyError, ValidationError
 from ..formulations.base import resolve_solver
-from ..instances import load_instance
+from ..model.instances import load_instance
 from ..outputs import MANIFEST, AtomicDirectory, run_metadata
 from ..rows import BellmanRows
 from . import figures as figs
@@ -84,6 +83,7 @@ __all__ = [
     "DEFAULT_OUT",
     "DEFAULT_SEEDS",
     "PAPER_TABLE1",
+    "STEP_HOOKS",
     "Reproduction",
     "Tracker",
     "build_model",
@@ -173,17 +173,24 @@ class Tracker:
                 self.progress.update(task, total=done, completed=done, status=f"{dt:.2f} s")
 
 
-#: Environment variable naming a step (``build``, ``vstar``, ... ``write``, ``commit``) at
-#: whose start the process sends itself SIGINT: how the tests interrupt a run at a
-#: chosen point, as Ctrl-C would.
-INTERRUPT_AT_ENV = "LPBOUNDS_INTERRUPT_AT"
+#: Callables run, in order, with each step's name (``build``, ``vstar``, ... ``write``,
+#: ``commit``) as the step starts; empty by default, so a run calls nothing. A caller that
+#: needs to act at a chosen point of a run appends a hook (tests/test_interrupt.py sends
+#: the process SIGINT from one, as Ctrl-C would at that step) and removes it afterwards;
+#: an exception a hook raises ends the run as one raised by the step itself would.
+STEP_HOOKS: list[Callable[[str], None]] = []
 
 
 def checkpoint(name: str) -> None:
-    """Send SIGINT to this process if :data:`INTERRUPT_AT_ENV` names ``name`` (tests)."""
-    if os.environ.get(INTERRUPT_AT_ENV) == name:
-        os.kill(os.getpid(), signal.SIGINT)
-        time.sleep(1.0)  # the handler runs at the next bytecode; never continue past
+    """Run every hook of :data:`STEP_HOOKS` with ``name``: step ``name`` starts now.
+
+    Parameters
+    ----------
+    name : str
+        The step (a key of the run's timings, or ``"commit"``).
+    """
+    for hook in tuple(STEP_HOOKS):
+        hook(name)
 
 
 def _cpu_seconds() -> float:
@@ -479,7 +486,7 @@ def solve_bounds(params: PatrolParams, solver: str, tr: Tracker) -> Bounds:
             summaries[key] = LPSummary(
                 solver=lp_res.solver,
                 solver_options=solver_options,
-                status=str(lp_res.status),
+                status=lp_res.status,
                 n_rows=int(lp.rows.n_rows),
                 objective=float(lp_res.objective),
                 primal_residual=float(lp_res.primal_residual),

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from ..status import Status
+
 __all__ = [
     "ClaimsSummary",
     "Counts",
@@ -112,7 +114,7 @@ class LPSummary:
 
     solver: str
     solver_options: dict[str, Any]
-    status: str
+    status: Status
     n_rows: int
     objective: float
     primal_residual: float

@@ -12,7 +12,8 @@ lpbounds and cvxpy, with what is needed to judge their answers:
   Bellman row ``k`` of ``rows.npz``;
 * ``optimum.npy``: the exact optimum (the fixed point, float64, one entry per column in
   column order), computed by exact DP to ``EXPORT_DP_RTOL * max|R| / (1 - lambda)`` and
-  certified from the point alone (:func:`lpbounds.certificate.certify`): the true optimum
+  certified from the point alone (:func:`lpbounds.certification.certificate.certify`): the true
+  optimum
   lies within the sidecar's ``certificate`` bracket of it;
 * ``rows.npz``: the Bellman rows (``owner``, ``action``, ``reward``, ``targets``,
   ``probs``, ``discount``), the cost ``c`` and the column meaning (``partition_labels``
@@ -45,19 +46,20 @@ from typing import Any
 
 import numpy as np
 
-from .certificate import Certificate, certify
-from .errors import ConvergenceError, OutputError, ValidationError
-from .outputs import MANIFEST, AtomicDirectory, _sha256, run_metadata
-from .rows import BellmanRows
-from .status import Status
-from .tolerances import EXPORT_DP_RTOL, LP_CERT_RTOL, dp_scale
-from .validation import check_vector
+from ..certification.certificate import Certificate, certify
+from ..errors import ConvergenceError, OutputError, ValidationError
+from ..outputs import MANIFEST, AtomicDirectory, file_sha256, run_metadata
+from ..rows import BellmanRows
+from ..status import Status
+from ..tolerances import EXPORT_DP_RTOL, LP_CERT_RTOL, dp_scale
+from ..validation import check_vector
 
 __all__ = [
     "EXPORTABLE",
     "EXPORT_FILES",
     "FORMATS",
     "Export",
+    "ExportArgumentError",
     "ExportResult",
     "Score",
     "export_lp",
@@ -92,60 +94,118 @@ _ENTRY = {
 
 
 # ---------------------------------------------------------------------- inputs
+#: :attr:`ExportArgumentError.value` of an error about an argument as a whole
+NO_VALUE: Any = object()
+
+
+class ExportArgumentError(ValidationError):
+    """A bad argument of :func:`export_lp`, as data: which argument, its value, the problem.
+
+    ``str(exc)`` names the argument by its Python name (``formulation``, ``partition``,
+    ``fmt``); a caller that knows the argument under another name (the command line's
+    ``--format``) words the error with :meth:`message`.
+
+    Parameters
+    ----------
+    argument : str
+        The parameter of :func:`export_lp`: ``"formulation"``, ``"partition"`` or ``"fmt"``.
+    value : object
+        The offending value, or :data:`NO_VALUE` when the argument as a whole is refused.
+    problem : str
+        What is wrong with it.
+    sep : str
+        Between the argument (and value) and ``problem``: ``": "``, or ``" "`` when
+        ``problem`` continues the sentence (``"must be written ..."``).
+    """
+
+    def __init__(self, argument: str, value: Any, problem: str, sep: str = ": ") -> None:
+        self.argument = argument
+        self.value = value
+        self.problem = problem
+        self.sep = sep
+        super().__init__(self.message(argument))
+
+    def message(self, name: str) -> str:
+        """The error with the argument called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            The argument's name for the reader (``"--partition"``).
+
+        Returns
+        -------
+        str
+            ``name``, the value's ``repr`` (unless :data:`NO_VALUE`), ``sep``, ``problem``.
+        """
+        what = name if self.value is NO_VALUE else f"{name} {self.value!r}"
+        return f"{what}{self.sep}{self.problem}"
+
+
 def check_formulation(name: Any) -> str:
-    """The paper name of an exportable formulation (case-insensitive), or a clear error."""
+    """The paper name of an exportable formulation (case-insensitive), or a clear error.
+
+    Raises
+    ------
+    ExportArgumentError
+        For argument ``"formulation"``: not one of :data:`EXPORTABLE`.
+    """
     key = str(name).upper() if isinstance(name, str) else None
     if key not in EXPORTABLE:
-        raise ValidationError(
-            f"--formulation {name!r}: not an exportable formulation; choose one of "
-            f"{', '.join(EXPORTABLE)} (the LPs of Bellman rows, whose exact optimum is known)"
+        raise ExportArgumentError(
+            "formulation",
+            name,
+            f"not an exportable formulation; choose one of {', '.join(EXPORTABLE)} "
+            "(the LPs of Bellman rows, whose exact optimum is known)",
         )
     return key
 
 
 def _partition_from_spec(spec: str, n_states: int) -> Any:
-    """``random:M[:SEED]`` (:func:`lpbounds.generators.random_partition`) or a ``.npy``
-    file of one partition label per state; every error names ``--partition``."""
+    """``random:M[:SEED]`` (:func:`lpbounds.model.generators.random_partition`) or a ``.npy``
+    file of one partition label per state; every error is an :class:`ExportArgumentError`
+    of argument ``"partition"``."""
     try:
         return _build_partition(spec, n_states)
+    except ExportArgumentError:
+        raise
     except ValidationError as exc:
-        if str(exc).startswith("--partition"):
-            raise
-        raise ValidationError(f"--partition {spec!r}: {exc}") from exc
+        raise ExportArgumentError("partition", spec, str(exc)) from exc
 
 
 def _build_partition(spec: str, n_states: int) -> Any:
-    from .generators import random_partition
-    from .partition import Partition
+    from ..model.generators import random_partition
+    from ..model.partition import Partition
 
     if spec.startswith("random:"):
         parts = spec.split(":")[1:]
         if not 1 <= len(parts) <= 2 or not all(p.isdigit() for p in parts):
-            raise ValidationError(f"--partition {spec!r} must be written random:M[:SEED]")
+            raise ExportArgumentError("partition", spec, "must be written random:M[:SEED]", " ")
         seed = int(parts[1]) if len(parts) == 2 else 0
         return random_partition(n_states, int(parts[0]), seed)
     path = Path(spec)
     if path.suffix != ".npy" or not path.is_file():
-        raise ValidationError(
-            f"--partition {spec!r}: expected random:M[:SEED] or an existing .npy file of "
-            "partition labels (one per state)"
+        raise ExportArgumentError(
+            "partition",
+            spec,
+            "expected random:M[:SEED] or an existing .npy file of partition labels (one per state)",
         )
     try:
         labels = np.load(path, allow_pickle=False)
     except (ValueError, OSError) as exc:
-        raise ValidationError(f"--partition {spec!r}: not a readable .npy file ({exc})") from exc
+        raise ExportArgumentError("partition", spec, f"not a readable .npy file ({exc})") from exc
     part = Partition(labels)
     if part.n_states != n_states:
-        raise ValidationError(
-            f"--partition {spec!r} labels {part.n_states} states; the model has {n_states}"
+        raise ExportArgumentError(
+            "partition", spec, f"labels {part.n_states} states; the model has {n_states}", " "
         )
     return part
 
 
 def resolve_case(model: str, formulation: str, partition: str | None = None) -> Any:
-    """The study :class:`~lpbounds.study.Case` of ``model`` (a file, a packaged name or
+    """The study :class:`~lpbounds.studies.compare.Case` of ``model`` (a file, a packaged name or
     ``garnet:N:M[:SEED]``), its partition replaced by ``partition`` when given."""
-    from .study import Case, load_case
+    from .compare import Case, load_case
 
     case = load_case(str(model))
     if case.kind == "patrol" and formulation not in _PATROL:
@@ -154,7 +214,9 @@ def resolve_case(model: str, formulation: str, partition: str | None = None) -> 
         return case
     if formulation == "ELP" or formulation in _PATROL:
         why = "uses no partition" if formulation == "ELP" else "uses the patrol partition"
-        raise ValidationError(f"--partition does not apply: {formulation} {why}")
+        raise ExportArgumentError(
+            "partition", NO_VALUE, f"does not apply: {formulation} {why}", " "
+        )
     part = _partition_from_spec(str(partition), case.mdp.n_states)
     return Case(case.spec, case.name, case.instance, case.mdp, part)
 
@@ -188,8 +250,8 @@ def provenance(
     case: Any, formulation: str, partition: str | None, command: str | None
 ) -> dict[str, Any]:
     """Where the LP comes from: model file and hash, parameters, partition, versions."""
-    from . import __version__
-    from .study import FORMULATIONS, parse_instance
+    from .._defaults import VERSION as __version__
+    from .compare import FORMULATIONS, parse_instance
 
     out: dict[str, Any] = {"model": case.spec, "instance": case.name}
     inst = case.instance
@@ -199,7 +261,7 @@ def provenance(
             model_path=None,
             model_sha256=None,
             model_parameters={"kind": "garnet", **(g or {})},
-            model_builder="lpbounds.study.load_case: garnet(N, 3, 4, 0.9, seed=SEED), "
+            model_builder="lpbounds.studies.compare.load_case: garnet(N, 3, 4, 0.9, seed=SEED), "
             "random_partition(N, M, seed=SEED + 1)",
         )
         default_partition: Any = "random_partition(N, M, seed=SEED + 1)"
@@ -207,7 +269,7 @@ def provenance(
         path = Path(inst.path).resolve() if inst.path is not None else None
         out.update(
             model_path=None if path is None else str(path),
-            model_sha256=None if path is None else _sha256(path),
+            model_sha256=None if path is None else file_sha256(path),
             model_parameters=inst.config.get("model"),
         )
         default_partition = inst.config.get("partition")
@@ -260,8 +322,8 @@ class Optimum:
 def _certificate_summary(cert: Certificate, x: np.ndarray) -> dict[str, Any]:
     return {
         "what": "lower <= exact optimum <= upper entrywise, lower = x - shift_down and "
-        "upper = x + shift_up (rounded outward), from x alone (lpbounds.certificate.certify "
-        "on the rows of rows.npz, rounding included)",
+        "upper = x + shift_up (rounded outward), from x alone "
+        "(lpbounds.certification.certificate.certify on the rows of rows.npz, rounding included)",
         "error_bound": cert.error_bound,
         "width": cert.width,
         "shift_down": float(np.max(x - cert.lower, initial=0.0)),
@@ -339,15 +401,14 @@ def _naming(form: Any, formulation: str) -> dict[str, Any]:
 
 def _write_model(form: Any, path: Path) -> None:
     """The model file, written by HiGHS from the formulation's ``(A, b, c)``."""
-    import highspy
+    from ..formulations.highs import write_lp
 
-    from .formulations._highs import highs_lp, quiet_highs
-
-    h = quiet_highs()
-    if h.passModel(highs_lp(form.A, form.b, form.c)) == highspy.HighsStatus.kError:
+    accepted, written = write_lp(form.A, form.b, form.c, path)
+    if not accepted:
         raise OutputError(f"HiGHS refused the model of {form.name}")
-    # kWarning: HiGHS names the unnamed columns c0.. and rows r0.. (what the sidecar says)
-    if h.writeModel(str(path)) == highspy.HighsStatus.kError or not path.is_file():
+    # HiGHS' kWarning (it names the unnamed columns c0.. and rows r0..: what the sidecar
+    # says) counts as written
+    if not written or not path.is_file():
         raise OutputError(f"HiGHS could not write {str(path)!r}")
 
 
@@ -378,7 +439,7 @@ def export_lp(
         A ``models/*.toml`` file, a packaged model's name, or ``garnet:N:M[:SEED]``.
     formulation : str
         One of :data:`EXPORTABLE` (built as a study builds it: SLP with uniform ``mu``,
-        IB with ``L = 2``; :data:`lpbounds.study.FORMULATIONS`).
+        IB with ``L = 2``; :data:`lpbounds.studies.compare.FORMULATIONS`).
     out : path
         The folder, replaced as a whole (an existing one may hold only
         :data:`EXPORT_FILES`); complete or absent (:class:`~lpbounds.outputs.AtomicDirectory`).
@@ -396,18 +457,22 @@ def export_lp(
 
     Raises
     ------
+    ExportArgumentError
+        An unknown formulation or format, or a bad partition (before any work): a
+        :class:`ValidationError` naming the argument (``formulation``, ``fmt``,
+        ``partition``) and its value as attributes.
     ValidationError
-        An unknown formulation or format, a bad model or partition (before any work).
+        A bad model (before any work).
     OutputError
         ``out`` not writable, holding other files, or locked (before any work).
     """
-    from .outputs import check_output_dir
-    from .study import FORMULATIONS
+    from ..outputs import check_output_dir
+    from .compare import FORMULATIONS
 
     name = check_formulation(formulation)
     if fmt not in FORMATS:
-        raise ValidationError(f"--format {fmt!r}: choose one of {', '.join(FORMATS)}")
-    check_output_dir(out, "--out", replaceable=EXPORT_FILES)
+        raise ExportArgumentError("fmt", fmt, f"choose one of {', '.join(FORMATS)}")
+    check_output_dir(out, "out", replaceable=EXPORT_FILES)
     say = step or (lambda _s: None)
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
@@ -446,7 +511,7 @@ def export_lp(
         seconds["write_model"] = time.perf_counter() - t1
         t1 = time.perf_counter()
         say("writing the rows, the optimum and the sidecar")
-        np.savez(tmp / ROWS, **_rows_arrays(form, case, name))  # type: ignore[arg-type]
+        np.savez(tmp / ROWS, **_rows_arrays(form, case, name))
         if opt.x is not None:
             np.save(tmp / OPTIMUM, opt.x)
         (tmp / SIDECAR).write_text(json.dumps(sidecar, indent=2) + "\n")
@@ -680,7 +745,7 @@ class Score:
         ``max_k (b - A x)_k^+`` (at row ``worst_row``).
     certified_error : float
         A bound on ``max_j |x_j - v*_j|`` for the true optimum ``v*``, from ``x`` alone
-        (:func:`lpbounds.certificate.certify` on the export's rows).
+        (:func:`lpbounds.certification.certificate.certify` on the export's rows).
     status : Status
         OPTIMAL when the certified error is within ``accuracy * max|R| / (1 - lambda)``
         (the Bellman residual within ``accuracy * max|R|``), else INACCURATE.

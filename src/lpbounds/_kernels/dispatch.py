@@ -1,13 +1,13 @@
 """Which kernels run an operation: plain numpy for small models, compiled (numba) for large.
 
-The compiled kernels (:mod:`lpbounds._kernels`, :mod:`lpbounds._aggregate`) are fast but
-cost a compile on first use in a fresh environment (about 20 s for a DP solve and an RLP
-on two cores; numba caches the machine code afterwards), and importing numba alone takes
-a few tenths of a second. Their numpy twins (:mod:`lpbounds._npkernels`) compute the same
-numbers with the same arithmetic and need neither. An operation whose sweep reads fewer
-than :data:`SMALL_READS` values uses the twins; larger ones use the compiled kernels,
-announced once per kernel group on the ``lpbounds`` logger (WARNING, so it reaches
-stderr) when numba has not cached them yet.
+The compiled kernels (:mod:`lpbounds._kernels.compiled`,
+:mod:`lpbounds._kernels.aggregate`) are fast but cost a compile on first use in a fresh
+environment (about 20 s for a DP solve and an RLP on two cores; numba caches the machine
+code afterwards), and importing numba alone takes a few tenths of a second. Their numpy
+twins (:mod:`lpbounds._kernels.twins`) compute the same numbers with the same arithmetic
+and need neither. An operation whose sweep reads fewer than :data:`SMALL_READS` values
+uses the twins; larger ones use the compiled kernels, announced once per kernel group on
+the ``lpbounds`` logger (WARNING, so it reaches stderr) when numba has not cached them yet.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import os
 from types import ModuleType
 from typing import Any
 
-from . import _npkernels
+from . import twins as _npkernels
 
 __all__ = ["SMALL_READS", "aggregate_kernels", "is_compiled", "nchunks", "sweep_kernels"]
 
@@ -61,20 +61,20 @@ def is_compiled(reads: int) -> bool:
 
 def sweep_kernels(reads: int, group: str = "rows") -> ModuleType:
     """The module of Bellman-sweep kernels for an operation of ``reads`` values per sweep:
-    :mod:`lpbounds._npkernels` or :mod:`lpbounds._kernels`."""
+    :mod:`lpbounds._kernels.twins` or :mod:`lpbounds._kernels.compiled`."""
     if not is_compiled(reads):
         return _npkernels
-    from . import _kernels
+    from . import compiled as _kernels
 
     _announce(group, _kernels, reads)
     return _kernels
 
 
 def aggregate_kernels(reads: int) -> ModuleType:
-    """The aggregation kernels (:mod:`lpbounds._aggregate` or their numpy twins)."""
+    """The aggregation kernels (:mod:`lpbounds._kernels.aggregate` or their numpy twins)."""
     if not is_compiled(reads):
         return _npkernels
-    from . import _aggregate
+    from . import aggregate as _aggregate
 
     _announce("aggregate", _aggregate, reads)
     return _aggregate
@@ -114,13 +114,43 @@ def _needs_compile(module: ModuleType, names: tuple[str, ...]) -> bool:
     signature still compiles, silently)."""
     for name in names:
         obj = getattr(module, name)
-        cache: Any = getattr(obj, "_cache", None)
-        if cache is None or getattr(obj, "overloads", None):
+        if getattr(obj, "overloads", None):
             continue
-        try:
-            index = cache._cache_file._index_path
-        except AttributeError:  # another numba version: assume it compiles
-            return True
-        if not os.path.exists(index):
+        index = _numba_cache_index_path(obj)
+        if index == _NO_CACHE:
+            continue
+        if index is None or not os.path.exists(index):
             return True
     return False
+
+
+#: :func:`_numba_cache_index_path` of a function that numba does not cache
+_NO_CACHE = ""
+
+
+def _numba_cache_index_path(dispatcher: Any) -> str | None:
+    """Where numba keeps the on-disk cache index of a ``cache=True`` dispatcher.
+
+    numba has no public API for this path: this function is the one place in lpbounds
+    that reads numba's private dispatcher attributes (``_cache``, its ``_cache_file`` and
+    that file's ``_index_path``), so that a change of numba's internals touches it alone.
+
+    Parameters
+    ----------
+    dispatcher : numba.core.dispatcher.Dispatcher
+        An ``@numba.njit(cache=True)`` function (any object is accepted).
+
+    Returns
+    -------
+    str or None
+        The index path; ``""`` when the object has no numba cache (not a dispatcher, or
+        ``cache=False``); ``None`` when this numba version lays its cache out otherwise
+        (callers then assume the function compiles).
+    """
+    cache: Any = getattr(dispatcher, "_cache", None)
+    if cache is None:
+        return _NO_CACHE
+    try:
+        return str(cache._cache_file._index_path)
+    except AttributeError:  # another numba version
+        return None

@@ -3,9 +3,9 @@ r"""Theorem verdicts: the paper's LP results checked solver by solver with certi
 Every check compares two **certified intervals**, never a point against a tolerance:
 
 * the LP side: the bracket ``lower <= exact optimum <= upper`` that lpbounds certifies from
-  the returned point alone (:func:`lpbounds.checks.lp_bracket`, the result's
-  ``certificate``; the contraction argument of :mod:`lpbounds.certificate`), or the
-  bracket on the LP's optimal objective (:func:`lpbounds.checks.lp_objective_bracket`:
+  the returned point alone (:func:`lpbounds.certification.checks.lp_bracket`, the result's
+  ``certificate``; the contraction argument of :mod:`lpbounds.certification.certificate`), or the
+  bracket on the LP's optimal objective (:func:`lpbounds.certification.checks.lp_objective_bracket`:
   a certified feasible point above, weak duality below);
 * the exact side: ``[values - error_bound, values + error_bound]`` of the fixed points of
   :func:`lpbounds.dp.solve_exact` (``V*``, RLP's ``v*``).
@@ -75,8 +75,8 @@ from typing import Any
 
 import numpy as np
 
-from .certificate import contraction_modulus, objective_bracket
-from .checks import (
+from ..certification.certificate import contraction_modulus, objective_bracket
+from ..certification.checks import (
     Comparison,
     combine,
     compare_at_least,
@@ -85,9 +85,9 @@ from .checks import (
     lp_bracket,
     lp_objective_bracket,
 )
-from .dp import exact_rows, solve_exact
-from .errors import LPBoundsError, ValidationError
-from .formulations import (
+from ..dp import exact_rows, solve_exact
+from ..errors import LPBoundsError, ValidationError
+from ..formulations import (
     ELP,
     IB,
     LLP,
@@ -97,15 +97,15 @@ from .formulations import (
     installed_lp_solvers,
     resolve_solver,
 )
-from .formulations.alp import ALP
-from .formulations.base import LPResult
-from .generators import garnet, random_partition
-from .instances import load_instance, models_dir
-from .mdp import FiniteMDP
-from .partition import Partition
-from .rows import BellmanRows
-from .status import Verdict
-from .tolerances import LP_COMPARE_RTOL, dp_scale
+from ..formulations.alp import ALP
+from ..formulations.base import LPResult
+from ..model.generators import garnet, random_partition
+from ..model.instances import load_instance, models_dir
+from ..model.mdp import FiniteMDP
+from ..model.partition import Partition
+from ..rows import BellmanRows
+from ..status import Verdict
+from ..tolerances import LP_COMPARE_RTOL, dp_scale
 
 __all__ = [
     "RELIABLE_LP_SOLVERS",
@@ -225,7 +225,7 @@ def _estimated_states(inst: Any) -> int | None:
         return size
     if inst.kind == "patrol":
         try:
-            from .patrol.instance import model_for, params_from_instance
+            from ..patrol.instance import model_for, params_from_instance
 
             return int(model_for(params_from_instance(inst)).n_states)
         except Exception:  # the patrol package is optional here: unknown size
@@ -245,7 +245,7 @@ def _record(
         "claim": claim,
         "instance": instance,
         "solver": solver,
-        "verdict": cmp.verdict.value,
+        "verdict": cmp.verdict,
         "width": cmp.width,
         "deviation": cmp.deviation,
         "accuracy": cmp.accuracy,
@@ -330,7 +330,7 @@ def _optimum_claims(
 # ---------------------------------------------------------------------- solver-free checks
 def _exact_checks(inst: VerifyInstance, refs: _Refs) -> list[Record]:
     """Phi v* >= V*; every VI iterate from a feasible start dominates v*; IB's fixed point."""
-    from .certificate import certify
+    from ..certification.certificate import certify
 
     mdp, part, name, acc = inst.mdp, inst.partition, inst.name, refs.accuracy
     out = [
@@ -483,7 +483,8 @@ def lemma2_slack(rlp: Any, result: LPResult, v_lo: np.ndarray, v_hi: np.ndarray)
     interval (*inconclusive*), never a *violated* verdict.
 
     ``s`` is bounded above from ``[v_lo, v_hi]`` with a rounding allowance of ``2 (L + 3)
-    eps`` times the magnitudes summed (as in :mod:`lpbounds.certificate`), the weighted
+    eps`` times the magnitudes summed (as in :mod:`lpbounds.certification.certificate`), the
+    weighted
     sums by ``(n + 3) eps`` relative, and ``(L + 4) eps (max|R| + max|v|)`` covers SLP's
     renormalised probabilities. ``inf`` when the result has no pair duals.
     """
@@ -884,13 +885,15 @@ def run_verification(
 
 
 _CHECK_ORDER = ["Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2", "Remark 2"]
-_VERDICT_RANK = {"holds": 0, "inconclusive": 1, "violated": 2}
+#: Verdicts from best to worst (the order of the summary's counts)
+_VERDICTS = (Verdict.HOLDS, Verdict.INCONCLUSIVE, Verdict.VIOLATED)
+_VERDICT_RANK = {v: k for k, v in enumerate(_VERDICTS)}
 
 
 def _badness(r: Record) -> tuple[int, float]:
     acc = r["accuracy"]
     ratio = r["width"] / acc if acc and np.isfinite(acc) else float(r["width"])
-    return _VERDICT_RANK[r["verdict"]], ratio if np.isfinite(ratio) else float("inf")
+    return _VERDICT_RANK[Verdict(r["verdict"])], ratio if np.isfinite(ratio) else float("inf")
 
 
 def summarize(records: Sequence[Record]) -> list[Record]:
@@ -913,8 +916,8 @@ def summarize(records: Sequence[Record]) -> list[Record]:
     ):
         worst = max(recs, key=_badness)
         row: Record = {"check": check, "solver": solver, "records": len(recs)}
-        for v in ("holds", "inconclusive", "violated"):
-            row[v] = sum(r["verdict"] == v for r in recs)
+        for v in _VERDICTS:
+            row[v.value] = sum(Verdict(r["verdict"]) is v for r in recs)
         row.update(verdict=worst["verdict"], width=worst["width"], accuracy=worst["accuracy"])
         out.append(row)
     return out
@@ -922,8 +925,8 @@ def summarize(records: Sequence[Record]) -> list[Record]:
 
 def exit_status(records: Sequence[Record], *, strict: bool = False) -> int:
     """1 if a record is *violated* (or, with ``strict``, *inconclusive*), else 0."""
-    bad = {"violated", "inconclusive"} if strict else {"violated"}
-    return 1 if any(r["verdict"] in bad for r in records) else 0
+    bad = {Verdict.VIOLATED, Verdict.INCONCLUSIVE} if strict else {Verdict.VIOLATED}
+    return 1 if any(Verdict(r["verdict"]) in bad for r in records) else 0
 
 
 def write_json(records: list[Record], path: str | Path) -> None:
