@@ -652,6 +652,81 @@ class CutLoopOutput:
     master: NLPMaster
 
 
+def _check_loop_options(
+    max_rounds: int, cuts_per_round: int, cglp_rows: str, normalization: str
+) -> None:
+    """The cut loop's own options, checked before anything is built."""
+    if max_rounds < 1:
+        raise ValidationError(f"max_rounds must be >= 1; got {max_rounds}")
+    if normalization not in NORMALIZATIONS:
+        raise ValidationError(
+            f"normalization must be one of {NORMALIZATIONS}; got {normalization!r}"
+        )
+    if cglp_rows not in ("all", "binding"):
+        raise ValidationError(f"cglp_rows must be 'all' or 'binding'; got {cglp_rows!r}")
+    if cuts_per_round < 1:
+        raise ValidationError(f"cuts_per_round must be >= 1; got {cuts_per_round}")
+
+
+def _separating_cuts(
+    be: _Backend,
+    nlp: NLP,
+    sol: HighsSolution,
+    wbar: np.ndarray,
+    cand: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    n_single: int,
+    cglp_rows: str,
+    normalization: str,
+) -> tuple[list[np.ndarray], list[float]]:
+    """One round's cuts: a CGLP per violated disjunction in ``cand`` at the master's point
+    ``wbar``, each cut ``alpha' w >= beta`` with ``beta`` certified by the term LPs over the
+    whole master and kept only when it cuts ``wbar`` off by more than the minimum depth."""
+    assert be.master_data is not None
+    m = nlp.rows.n_vars
+    scale = nlp.scale
+    viol_tol = NLP_VIOLATION_RTOL * scale
+    depth_tol = NLP_CUT_MIN_DEPTH_RTOL * scale
+    starts = nlp.disj_start
+    a_all, b_all = nlp.term_matrix
+    new_a: list[np.ndarray] = []
+    new_b: list[float] = []
+    G, h = be.master_data.A, be.master_data.row_lo
+    # cglp_rows="binding": the CGLP sees only the single-term rows and the cuts
+    # binding at wbar (a relaxation of the master, so its cuts are valid all the
+    # same, possibly weaker); the certified right-hand side below always uses the
+    # whole master
+    slack = G @ wbar - h
+    keep = np.flatnonzero(
+        (np.arange(G.shape[0]) < n_single)
+        | (sol.row_dual > 0)
+        | (slack <= viol_tol)
+        | (cglp_rows == "all")
+    )
+    gk, hk = G[keep], h[keep]
+    for d in cand:
+        sl = slice(starts[d], starts[d + 1])
+        at, bt = a_all[sl], b_all[sl]
+        cg = be.solve(cglp_data(wbar, gk, hk, lo, hi, at, bt, normalization), CutGeneratingLP)
+        if cg.status is not Status.OPTIMAL or not cg.objective < 0:
+            continue
+        alpha = cg.x[:m].copy()
+        s = float(np.abs(alpha).max())
+        if not s > 0:
+            continue
+        alpha /= s
+        bounds = be.term_bounds((alpha, G, h, lo, hi, at, bt))
+        if np.isnan(bounds).any():
+            continue  # a term LP failed: no certified right-hand side, no cut
+        beta = float(bounds.min())
+        beta -= NLP_CUT_SAFETY_RTOL * max(1.0, abs(beta))
+        if beta - float(alpha @ wbar) > depth_tol:
+            new_a.append(alpha)
+            new_b.append(beta)
+    return new_a, new_b
+
+
 def cutting_planes(
     nlp: NLP,
     *,
@@ -671,16 +746,7 @@ def cutting_planes(
     ``nlp`` is read only (its public structure: rows, cost, box, terms, strategies); the
     master the loop builds is returned in :attr:`CutLoopOutput.master`.
     """
-    if max_rounds < 1:
-        raise ValidationError(f"max_rounds must be >= 1; got {max_rounds}")
-    if normalization not in NORMALIZATIONS:
-        raise ValidationError(
-            f"normalization must be one of {NORMALIZATIONS}; got {normalization!r}"
-        )
-    if cglp_rows not in ("all", "binding"):
-        raise ValidationError(f"cglp_rows must be 'all' or 'binding'; got {cglp_rows!r}")
-    if cuts_per_round < 1:
-        raise ValidationError(f"cuts_per_round must be >= 1; got {cuts_per_round}")
+    _check_loop_options(max_rounds, cuts_per_round, cglp_rows, normalization)
     t0 = time.perf_counter()
     be = _Backend(backend, solver, options)
     rows = nlp.rows
@@ -699,7 +765,6 @@ def cutting_planes(
     # max(1, |upper|) would call a 10 % gap closed when the rewards are of order 1e-6
     gap_unit = gap_rtol * float(c.sum()) * scale
     viol_tol = NLP_VIOLATION_RTOL * scale
-    depth_tol = NLP_CUT_MIN_DEPTH_RTOL * scale
     starts, sizes = nlp.disj_start, nlp.disj_size
     multi = np.flatnonzero(sizes >= 2)
 
@@ -741,40 +806,9 @@ def cutting_planes(
         new_a: list[np.ndarray] = []
         new_b: list[float] = []
         if not done:
-            G, h = be.master_data.A, be.master_data.row_lo
-            # cglp_rows="binding": the CGLP sees only the single-term rows and the cuts
-            # binding at wbar (a relaxation of the master, so its cuts are valid all the
-            # same, possibly weaker); the certified right-hand side below always uses the
-            # whole master
-            slack = G @ wbar - h
-            keep = np.flatnonzero(
-                (np.arange(G.shape[0]) < n_single)
-                | (sol.row_dual > 0)
-                | (slack <= viol_tol)
-                | (cglp_rows == "all")
+            new_a, new_b = _separating_cuts(
+                be, nlp, sol, wbar, cand, lo, hi, n_single, cglp_rows, normalization
             )
-            gk, hk = G[keep], h[keep]
-            for d in cand:
-                sl = slice(starts[d], starts[d + 1])
-                at, bt = a_all[sl], b_all[sl]
-                cg = be.solve(
-                    cglp_data(wbar, gk, hk, lo, hi, at, bt, normalization), CutGeneratingLP
-                )
-                if cg.status is not Status.OPTIMAL or not cg.objective < 0:
-                    continue
-                alpha = cg.x[:m].copy()
-                s = float(np.abs(alpha).max())
-                if not s > 0:
-                    continue
-                alpha /= s
-                bounds = be.term_bounds((alpha, G, h, lo, hi, at, bt))
-                if np.isnan(bounds).any():
-                    continue  # a term LP failed: no certified right-hand side, no cut
-                beta = float(bounds.min())
-                beta -= NLP_CUT_SAFETY_RTOL * max(1.0, abs(beta))
-                if beta - float(alpha @ wbar) > depth_tol:
-                    new_a.append(alpha)
-                    new_b.append(beta)
         entry = NLPIteration(
             iteration=rnd,
             lower=lower,
@@ -792,9 +826,7 @@ def cutting_planes(
             converged, stop = True, StopReason.GAP_CLOSED
             break
         if not new_a:
-            stop = (
-                StopReason.NO_VIOLATED_DISJUNCTION if cand.size == 0 else StopReason.NO_CUT_FOUND
-            )
+            stop = StopReason.NO_VIOLATED_DISJUNCTION if cand.size == 0 else StopReason.NO_CUT_FOUND
             break
         if time_limit is not None and time.perf_counter() - t0 > time_limit:
             stop = StopReason.TIME_LIMIT
