@@ -25,12 +25,12 @@ def _random_model(rng, n, m, sparsity=0.5):
 
 
 # ---------------------------------------------------------------------- layouts
-def test_ambiguous_layout_is_refused_and_both_readings_differ():
+def test_square_q_is_read_in_quantecons_layout_and_both_readings_differ():
     rng = np.random.default_rng(0)
     Q_sas, R = _random_model(rng, 3, 3)  # read below as Q[s, a, s']
-    with pytest.raises(ValidationError, match=r"Q has shape \(3, 3, 3\).*ambiguous"):
-        lb.FiniteMDP.from_quantecon(R, Q_sas, 0.9)
+    v_default, _ = exact(lb.FiniteMDP.from_quantecon(R, Q_sas, 0.9))  # n == m: QuantEcon's
     v_sas, _ = exact(lb.FiniteMDP.from_quantecon(R, Q_sas, 0.9, layout="sas"))
+    np.testing.assert_array_equal(v_default, v_sas)
     v_ass, _ = exact(lb.FiniteMDP.from_quantecon(R, Q_sas, 0.9, layout="ass"))
     np.testing.assert_allclose(v_sas, brute_force(Q_sas.transpose(1, 0, 2), R, 0.9)[0], rtol=1e-12)
     np.testing.assert_allclose(v_ass, brute_force(Q_sas, R, 0.9)[0], rtol=1e-12)

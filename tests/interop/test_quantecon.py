@@ -90,11 +90,47 @@ def test_puterman_docstring_iterates_bracket_v_star(published):
     np.testing.assert_array_equal(pol, SIGMA_STAR)  # the docstring's res.sigma
 
 
-def test_puterman_product_form_needs_a_layout():
-    # n == m: Q[s, a, s'] and P[a, s, s'] have the same shape, so the constructor refuses
-    # to guess (test_constructors.py shows a model where the two readings differ)
-    with pytest.raises(ValidationError, match=r"ambiguous.*layout='sas'.*layout='ass'"):
-        lb.FiniteMDP.from_quantecon(R_PUTERMAN, Q_PUTERMAN, BETA)
+def test_puterman_product_form_is_read_in_quantecons_layout():
+    # n == m: Q[s, a, s'] and P[a, s, s'] have the same shape; from_quantecon reads
+    # QuantEcon's layout without being told (the published V* and sigma* below are
+    # QuantEcon's; test_constructors.py shows a model where the two readings differ)
+    v, pol = exact(lb.FiniteMDP.from_quantecon(R_PUTERMAN, Q_PUTERMAN, BETA))
+    np.testing.assert_allclose(v, V_STAR, rtol=1e-9)
+    np.testing.assert_array_equal(pol, SIGMA_STAR)
+
+
+def _cake_eating(n, beta, seed):
+    """A stochastic cake-eating (savings) problem on a grid of n cake sizes: the action is
+    next period's planned size a <= s (the actions ARE the grid points, so m == n), eating
+    s - a with utility sqrt; the planned size is kept with probability 0.8, else a
+    random grid point at or below it (spoilage). QuantEcon's product form R (n, n),
+    Q (n, n, n), infeasible actions marked -inf."""
+    rng = np.random.default_rng(seed)
+    grid = np.linspace(0.0, 1.0, n)
+    R = np.full((n, n), -np.inf)
+    Q = np.zeros((n, n, n))
+    for s in range(n):
+        for a in range(s + 1):
+            R[s, a] = np.sqrt(grid[s] - grid[a])
+            Q[s, a, a] = 0.8
+            spoil = rng.random(a + 1)
+            Q[s, a, : a + 1] += 0.2 * spoil / spoil.sum()
+    return R, Q
+
+
+@pytest.mark.parametrize("beta", [0.9, 0.99])
+def test_square_savings_problem_equals_quantecons_own_solve(beta):
+    qe = pytest.importorskip("quantecon")
+    R, Q = _cake_eating(25, beta, seed=1)
+    res = qe.markov.DiscreteDP(R, Q, beta).solve(method="policy_iteration")
+    mdp = lb.FiniteMDP.from_quantecon(R, Q, beta)  # n == m == 25, no layout=
+    dp = lb.solve_exact(mdp)
+    # QuantEcon's policy iteration solves the final linear system: exact to rounding
+    slack = 1e-12 * np.abs(res.v).max()
+    assert np.all(dp.lower_values - slack <= res.v) and np.all(res.v <= dp.upper_values + slack)
+    assert dp.upper_values.max() - dp.lower_values.min() > 0
+    np.testing.assert_allclose(dp.values, res.v, rtol=0, atol=2 * dp.error_bound + slack)
+    np.testing.assert_array_equal(dp.policy, res.sigma)
 
 
 def test_beta_zero():

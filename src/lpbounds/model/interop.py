@@ -567,6 +567,15 @@ def _quantecon_rewards(R: Any, name: str = "R") -> tuple[np.ndarray, np.ndarray]
 
 
 def _product_layout(q: np.ndarray, n: int, m: int, layout: Any) -> str:
+    """The axis order of a 3-d ``Q`` given to :func:`from_quantecon`.
+
+    Without ``layout=``, QuantEcon's own ``Q[state, action, next]`` whenever the shape
+    allows it, as many actions as states included (the savings and cake-eating problems,
+    where the actions are next period's grid points: there ``(n, m, n) == (m, n, n)`` and
+    QuantEcon's reading is the one a user of ``DiscreteDP`` means); pymdptoolbox's
+    ``P[action, state, next]`` only when the shape says so. ``layout="ass"`` reads a square
+    ``Q`` the pymdptoolbox way.
+    """
     sas, ass = (n, m, n), (m, n, n)
     if layout is not None:
         layout = check_choice("layout", layout, LAYOUTS)
@@ -574,14 +583,7 @@ def _product_layout(q: np.ndarray, n: int, m: int, layout: Any) -> str:
         if q.shape != want:
             raise ValidationError(f"Q with layout={layout!r} must have shape {want}; got {q.shape}")
         return layout
-    if q.shape == sas == ass:
-        raise ValidationError(
-            f"Q has shape {q.shape} with as many actions as states ({n}): its layout is "
-            "ambiguous and is never guessed; pass layout='sas' (Q[state, action, next], "
-            "QuantEcon's and MDPSolver's) or layout='ass' (P[action, state, next], "
-            "pymdptoolbox's)"
-        )
-    if q.shape == sas:
+    if q.shape == sas:  # QuantEcon's own layout, also when n == m (then sas == ass)
         return "sas"
     if q.shape == ass:
         return "ass"

@@ -557,8 +557,10 @@ class FiniteMDP:
         layout : {"sas", "ass"}, optional
             The order of the axes of a 3-d ``Q``: ``"sas"`` is ``Q[state, action,
             next]`` (QuantEcon, MDPSolver), ``"ass"`` is ``P[action, state, next]``
-            (pymdptoolbox). Required when the shapes do not decide it (as many actions
-            as states); otherwise taken from the shapes.
+            (pymdptoolbox). By default QuantEcon's ``"sas"`` whenever the shape allows
+            it, also with as many actions as states (QuantEcon's savings and cake-eating
+            problems, whose actions are next period's grid points); ``"ass"`` only when
+            the shape says so or when passed.
         terminal : True or array_like of states, optional
             See :meth:`from_matrices`.
         terminal_reward : {"keep", "zero"}
@@ -568,7 +570,7 @@ class FiniteMDP:
         Raises
         ------
         ValidationError
-            For an ambiguous ``Q`` without ``layout=``, a pair listed twice, an index out
+            For a ``Q`` of neither shape, a pair listed twice, an index out
             of range, a state with no available action, a row not summing to one.
         """
         return interop.from_quantecon(
