@@ -35,6 +35,7 @@ from ..validation import (
     check_value_scale,
     first_index,
 )
+from . import gymnasium as gym_interop
 from . import interop
 
 __all__ = ["FiniteMDP", "index_dtype"]
@@ -622,6 +623,29 @@ class FiniteMDP:
             n_actions=n_actions, terminal=terminal, terminal_reward=terminal_reward,
             sense=sense, action_names=action_names,
         )  # fmt: skip
+
+    @classmethod
+    def from_gymnasium(
+        cls,
+        env: Any,
+        discount: float,
+        *,
+        sink: Any = "auto",
+        action_names: Sequence[str] | None = None,
+    ) -> FiniteMDP:
+        """Build an MDP from a Gymnasium environment with a tabular model ``env.unwrapped.P``.
+
+        ``P[s][a] = [(prob, next_state, reward, terminated), ...]`` (the toy-text
+        environments: FrozenLake, Taxi, CliffWalking, ...). Each pair's reward is the
+        expected transition reward ``sum p r``; a terminated transition goes to one added
+        absorbing zero-reward sink (the last state, ``mdp.sink``), which ``user_values``
+        and the other reported vectors leave out, so they have Gymnasium's indices.
+        Gymnasium itself is never imported. See
+        :func:`lpbounds.model.gymnasium.from_gymnasium` for ``sink=`` and the checks.
+        """
+        return gym_interop.from_gymnasium(
+            cls, env, discount, sink=sink, action_names=action_names
+        )
 
     def to_quantecon(self, form: str = "sa") -> Any:
         """This model as a ``quantecon.markov.DiscreteDP`` (needs QuantEcon installed).
