@@ -33,7 +33,7 @@ from lpbounds.tolerances import LP_COMPARE_RTOL
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=".", help="folder for the PNG")
+    ap.add_argument("--out", default="out/examples", help="folder for the PNG (created)")
     ap.add_argument("--steps", type=int, default=21, help="costs in the sweep")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)

@@ -35,7 +35,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--partitions", type=int, default=5)
     ap.add_argument("--rounds", type=int, default=40)
     ap.add_argument("--seed", type=int, default=3)
-    ap.add_argument("--out", default=".", help="folder for the PNG")
+    ap.add_argument("--out", default="out/examples", help="folder for the PNG (created)")
     args = ap.parse_args(argv)
 
     mdp = lb.garnet(args.states, 3, 3, 0.9, seed=args.seed)

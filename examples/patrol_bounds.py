@@ -31,7 +31,7 @@ from lpbounds.tolerances import LP_COMPARE_RTOL
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("model", nargs="?", default="patrol-small")
-    ap.add_argument("--out", default=".", help="folder for the PNG")
+    ap.add_argument("--out", default="out/examples", help="folder for the PNG (created)")
     args = ap.parse_args(argv)
 
     params = params_from_instance(args.model)

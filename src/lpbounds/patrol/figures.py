@@ -246,6 +246,7 @@ def plot_min_value_partitions(
                 e0 - 0.6,
                 color="green",
                 lw=2,
+                zorder=4,  # above the dots: the line is what the paper's caption names
                 label="min V* over the partition" if k == 0 else "_nolegend_",
             )
             if k:
