@@ -164,7 +164,7 @@ Callback = Callable[[int, float], None]
 AUTO_EVAL_SWEEPS: int = 5
 #: ``eval_sweeps="auto"``: the policy has settled when at most this fraction of the states
 #: changed their action in the last improvement (1 % and 0.1 % gave sweep times within
-#: 6 % of each other on the garnets and the patrol of issue 17).
+#: 6 % of each other on the garnets and the patrol of docs/benchmarks.md, "Peers").
 AUTO_SETTLED: float = 0.01
 
 
@@ -791,7 +791,7 @@ class ThreadChoice:
 
     Two threads halve a sweep on an idle 2-core machine, but when other jobs hold the
     cores, a parallel region waits for a descheduled thread and one thread is faster
-    (issue 17: a random MDP of 2,048,000 x 3 x 5 took 10.6 s on one thread and 13.7-14.7 s
+    (measured: a random MDP of 2,048,000 x 3 x 5 took 10.6 s on one thread and 13.7-14.7 s
     on two with one core busy). Sweeps of one kind (improvement, evaluation) are timed
     against each other: sweep 0 of a kind pays first-touch page faults and is not timed;
     the first kind to get that far runs sweep 1 on one thread and sweeps 2 and 3 on all

@@ -37,7 +37,7 @@ optimum ``A' y = c`` (stationarity), ``y' (A x - b) = 0`` (complementarity). For
 rows, the duals spread over (state, action) pairs are the paper's ``mu_u^i(x)``.
 
 A user's own constraints on the named variables go through ``solve(extra_constraints=[...])``
-(the research modifications of issue 12): the same checks, with the certificate reported
+(research modifications, docs/research.md): the same checks, with the certificate reported
 only where it still applies (see :meth:`Formulation.solve`).
 """
 

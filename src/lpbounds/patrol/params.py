@@ -3,7 +3,7 @@ r"""Parameters of the perimeter alert patrol problem (paper Section 4.1, 5 and A
 :class:`PatrolParams` holds every number of the model under the paper's names, with the
 paper's example as defaults (N = 15 nodes, stations (0, 3, 7, 11), D = 5, Gamma = 15,
 rho = 0.005, lambda = 0.9, alpha = 1/60, and the operator model of Appendix A with
-p = 0.01, a = c = 0.5, b = g = 0.45, mu1 = mu2 = 1). ``../shared/patrol-spec.md`` (the
+p = 0.01, a = c = 0.5, b = g = 0.45, mu1 = mu2 = 1). ``docs/patrol-model.md`` (the
 project's model specification) settles the paper's ambiguities; the one model choice it
 leaves open is :attr:`PatrolParams.allow_empty_loiter`.
 

@@ -4,7 +4,7 @@ The simulator follows one trajectory of the patrol MDP under a fixed policy and 
 sequence of disturbances, and records every alert from its arrival to the end of its
 service. The state index always comes from the MDP's own successor table
 (``x' = successors[x, u, y]``); alongside, a compiled kernel applies the dynamics ``f``
-of ``patrol-spec.md`` to the state's components *independently* and counts every step
+of ``docs/patrol-model.md`` to the state's components *independently* and counts every step
 on which the two disagree (:attr:`SimulationResult.mismatches`, which must be 0), so the
 simulation doubles as a check of the model on the visited states.
 
@@ -88,7 +88,7 @@ def spec_step(
     N: int,
     Gamma: int,
 ) -> np.ndarray:
-    """The dynamics ``f`` of ``patrol-spec.md`` on state components, vectorised.
+    """The dynamics ``f`` of ``docs/patrol-model.md`` on state components, vectorised.
 
     Parameters
     ----------

@@ -764,8 +764,8 @@ class PackedSweeps(PolicySweeps):
     probabilities unless one distribution is shared) makes every later sweep stream only
     its own rows. Each row is then computed by the same kernel with the same arithmetic,
     so the numbers are identical to the in-place sweep's. Measured on the 2,048,000 x 3 x 5
-    garnet (issue 17): a sweep 26 ms against 34 ms on two threads (52 against 71 on one),
-    the gather 9 ms; MPI does five sweeps per gather.
+    garnet (docs/benchmarks.md, "Peers"): a sweep 26 ms against 34 ms on two threads (52
+    against 71 on one), the gather 9 ms; MPI does five sweeps per gather.
     """
 
     def __init__(self, ops: BellmanRows, nchunks: int | None = None) -> None:
