@@ -150,13 +150,27 @@ def test_an_inaccurate_solve_is_not_accurate_and_keeps_a_valid_bound():
     assert row["certified_error"] > 1e-14 * 1.0  # wider than asked for: why it is inaccurate
 
 
-def test_default_solvers_note_what_is_missing():
+def test_default_solvers_name_what_is_missing_without_a_skip_note():
+    """A default study runs every installed solver: the known ones that are not installed
+    are listed (missing_solvers, notes.txt), not reported as skips of the user's choice."""
+    from lpbounds.studies.compare import missing_solvers
+    from lpbounds.studies.report import missing_solvers_note
+
     configs, notes = solver_configs(None)
     labels = {c.label for c in configs}
     assert "CLARABEL" in labels and "HIGHS:simplex" in labels and "HIGHS:ipm" in labels
-    missing = [s for s in INSTALL_HINTS if s not in installed_lp_solvers()]
-    if "GLPK" in missing:
-        assert any("GLPK" in n for n in notes), notes
+    assert not any("not installed" in n for n in notes), notes
+    installed = installed_lp_solvers()
+    missing = missing_solvers(installed)
+    assert not set(missing) & set(installed)
+    if "GLPK" not in installed:
+        assert "GLPK" in missing
+    for name in missing:
+        assert f"{name} ({INSTALL_HINTS[name]})" in missing_solvers_note(missing)
+    # a solver the user names and does not have is still a skip, with its install line
+    if missing:
+        _, named = solver_configs(["HIGHS:simplex", missing[0]])
+        assert any(missing[0] in n for n in named), named
 
 
 def test_unavailable_formulation_noted(monkeypatch):

@@ -275,6 +275,11 @@ def run(args: argparse.Namespace) -> int:
     )
     for note in result.notes:
         log.warning("note: %s", note)
+    if result.not_installed:
+        console.print(
+            f"{len(result.not_installed)} other known LP solvers are not installed here "
+            "(names and install commands in notes.txt)"
+        )
     target = AtomicDirectory(args.out, replaceable=COMPARE_FILES)
     with target as tmp:
         paths = save_study(

@@ -102,6 +102,7 @@ __all__ = [
     "Task",
     "available_formulations",
     "highs_algorithms",
+    "missing_solvers",
     "plot_study",
     "run_study",
     "save_study",
@@ -179,18 +180,17 @@ class SolverConfig:
         return backend(self.solver)
 
 
-def _missing_note(installed: Sequence[str]) -> str | None:
-    """The known solvers that are not installed (licensed ones left out), with install lines."""
+def missing_solvers(installed: Sequence[str]) -> list[str]:
+    """The known LP solvers that are not among ``installed`` (licensed ones left out): what
+    a default study (every installed solver) does not run."""
     from ..formulations.base import INSTALL_HINTS
 
-    missing = [
+    return [
         s
         for s in INSTALL_HINTS
         if s not in installed and "licence" not in INSTALL_HINTS[s] and s != "GLPK_MI"
     ]
-    if not missing:
-        return None
-    return "not installed, skipped: " + ", ".join(f"{s} ({INSTALL_HINTS[s]})" for s in missing)
+
 
 
 def _expand(spec: str, solver: str, opt: str, notes: list[str]) -> dict[str, dict[str, Any]]:
@@ -227,9 +227,11 @@ def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfi
     -------
     configs : list of SolverConfig
     notes : list of str
-        One line per solver or option set skipped, and why (a known solver that is not
+        One line per solver or option set skipped, and why (a named solver that is not
         installed, a HiGHS algorithm this highspy does not accept), and one per solver
-        whose backend is another's (``SCIPY`` runs HiGHS).
+        whose backend is another's (``SCIPY`` runs HiGHS). With ``names=None`` (every
+        installed solver) the known solvers that are not installed are not skipped but
+        absent: :func:`missing_solvers` lists them.
 
     Raises
     ------
@@ -241,8 +243,6 @@ def solver_configs(names: Iterable[str] | None = None) -> tuple[list[SolverConfi
     notes: list[str] = []
     if names is None:
         names = list(lp_capable_solvers())
-        if (line := _missing_note(names)) is not None:
-            notes.append(line)
     configs: list[SolverConfig] = []
     for spec in names:
         name, _, opt = str(spec).partition(":")
@@ -702,6 +702,10 @@ class StudyResult:
     notes: list[str]
     seconds: float
     params: dict[str, Any] = field(default_factory=dict)
+    #: a default study (every installed solver): the known LP solvers that are not
+    #: installed here, which it could not run (:func:`missing_solvers`; written to notes.txt
+    #: with their install commands)
+    not_installed: list[str] = field(default_factory=list)
 
     def summary(self) -> pd.DataFrame:
         """Median over repetitions per (instance, formulation, solver configuration)."""
@@ -794,7 +798,8 @@ def run_study(
         "jobs": jobs,
         "scheduler": scheduler if isinstance(scheduler, (str, type(None))) else "client",
     }
-    return StudyResult(frame, notes, time.perf_counter() - t0, params)
+    missing = missing_solvers(lp_capable_solvers()) if solvers is None else []
+    return StudyResult(frame, notes, time.perf_counter() - t0, params, missing)
 
 
 def _prepare_tasks(

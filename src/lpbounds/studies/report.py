@@ -45,6 +45,7 @@ __all__ = [
     "DEFAULT_SHIFTS",
     "ERROR_FLOOR",
     "TIME_FLOOR",
+    "missing_solvers_note",
     "plot_profiles",
     "plot_study",
     "profile_tables",
@@ -64,6 +65,13 @@ _POINT = frozenset(s.value for s in POINT_STATUSES)
 _OTHER_LIMITS = frozenset({Status.ITERATION_LIMIT.value, Status.LIMIT.value})
 _FAILED = frozenset({Status.INFEASIBLE.value, Status.UNBOUNDED.value, Status.SOLVER_ERROR.value})
 _KEYS = ["instance", "formulation", "config"]
+
+
+def missing_solvers_note(missing: Sequence[str]) -> str:
+    """One line naming the ``missing`` solvers with their install commands (notes.txt)."""
+    from ..formulations.base import INSTALL_HINTS
+
+    return "not installed, skipped: " + ", ".join(f"{s} ({INSTALL_HINTS[s]})" for s in missing)
 
 
 def sgm_column(shift: float) -> str:
@@ -281,6 +289,7 @@ def study_metadata(
         "study": params,
         "study_solvers": solver_distributions(solvers),
         "notes": list(result.notes),
+        "not_installed": list(result.not_installed),
         "seconds": result.seconds,
     }
 
@@ -311,7 +320,10 @@ def save_study(
     result.frame.to_csv(paths["csv"], index=False)
     result.summary().to_csv(paths["summary"], index=False)
     result.solver_summary(shifts).to_csv(paths["solvers"], index=False)
-    paths["notes"].write_text("".join(f"{n}\n" for n in result.notes))
+    notes = list(result.notes)
+    if result.not_installed:
+        notes.append(missing_solvers_note(result.not_installed))
+    paths["notes"].write_text("".join(f"{n}\n" for n in notes))
     meta = study_metadata(result, command_line)
     paths["metadata"].write_text(json.dumps(meta, indent=2, default=str) + "\n")
     try:
