@@ -114,6 +114,15 @@ def test_needs_compile_reads_the_cache_index(tmp_path):
     assert not _backend._needs_compile(cached, ("k",))  # type: ignore[arg-type]
     assert _backend._needs_compile(missing, ("k",))  # type: ignore[arg-type]
     assert not _backend._needs_compile(loaded, ("k",))  # type: ignore[arg-type]
+    # a group is announced only when none of its kernels is cached or loaded: one cached
+    # kernel means the cache is warm (the group's unused kernels must not announce a
+    # compile on every run)
+    group = SimpleNamespace(
+        k=_dispatcher(str(tmp_path / "none.nbi"), {}), j=_dispatcher(str(index), {})
+    )
+    assert not _backend._needs_compile(group, ("k", "j"))  # type: ignore[arg-type]
+    both_missing = SimpleNamespace(k=missing.k, j=missing.k)
+    assert _backend._needs_compile(both_missing, ("k", "j"))  # type: ignore[arg-type]
 
 
 def test_an_empty_numba_cache_is_detected(tmp_path):

@@ -109,19 +109,29 @@ def _announce(group: str, module: ModuleType, reads: int) -> None:
 
 
 def _needs_compile(module: ModuleType, names: tuple[str, ...]) -> bool:
-    """True if one of the numba functions ``names`` of ``module`` has neither a compiled
-    version in this process nor a cache index on disk (a heuristic: an index without this
-    signature still compiles, silently)."""
+    """True if none of the numba functions ``names`` of ``module`` (a kernel group) has a
+    compiled version in this process or a cache index on disk: a fresh environment, where
+    the whole group compiles.
+
+    A group with some kernels cached has been compiled here before; a model rarely uses
+    every kernel of its group (the game operator's ``bellman_maxmin`` is the NLP's only),
+    and judging by each kernel announced a compile on every run with a warm cache. A
+    kernel of such a group that a model uses for the first time compiles silently, in a
+    second or two (a heuristic either way: an index without this signature also compiles
+    silently).
+    """
+    cacheable = False  # kernels numba does not cache compile every run: nothing to announce
     for name in names:
         obj = getattr(module, name)
         if getattr(obj, "overloads", None):
-            continue
+            return False
         index = _numba_cache_index_path(obj)
         if index == _NO_CACHE:
             continue
-        if index is None or not os.path.exists(index):
-            return True
-    return False
+        cacheable = True
+        if index is not None and os.path.exists(index):
+            return False
+    return cacheable
 
 
 #: :func:`_numba_cache_index_path` of a function that numba does not cache
