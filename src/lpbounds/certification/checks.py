@@ -44,14 +44,6 @@ _TINY = float(np.finfo(np.float64).tiny)
 _ORDER = {Verdict.HOLDS: 0, Verdict.INCONCLUSIVE: 1, Verdict.VIOLATED: 2}
 
 
-def _down(x: Any) -> np.ndarray:
-    return np.nextafter(np.asarray(x, dtype=np.float64), -np.inf)
-
-
-def _up(x: Any) -> np.ndarray:
-    return np.nextafter(np.asarray(x, dtype=np.float64), np.inf)
-
-
 @dataclass(frozen=True)
 class Bracket:
     """A certified bracket ``lower <= exact optimum <= upper`` over an LP's variables.
