@@ -426,3 +426,48 @@ def test_nan_values_are_refused_not_half_a_policy():
     for tie in (-1.0, np.nan, np.inf):
         with pytest.raises(ValidationError, match="tie_rtol"):
             lb.greedy_policy(mdp, np.zeros(10), tie_rtol=tie)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    n=st.integers(1, 40),
+    a=st.integers(1, 3),
+    ll=st.integers(1, 4),
+    lam=st.sampled_from([0.0, 0.5, 0.9, 0.99, 0.995, 0.999]),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+    signed=st.booleans(),
+    frac=st.sampled_from([1.0, 0.6]),
+    seed=st.integers(0, 10_000),
+)
+def test_property_default_bracket_contains_v_star(n, a, ll, lam, scale, signed, frac, seed):
+    """The default ``solve_exact`` bracket ``[lower_values, upper_values]`` holds V* from an
+    independent dense policy iteration (up to that reference's own certified error) at
+    discounts up to 0.999 and reward scales 1e-6..1e6, and is not vacuous: its half-width
+    is within 1e-10 of the value scale ``max|R| / (1 - lambda)`` (plus the error bound's
+    absolute rounding slack for values below 1)."""
+    rr = (-scale, scale) if signed else (0.0, scale)
+    mdp = lb.garnet(n, a, ll, lam, seed=seed, allowed_fraction=frac, reward_range=rr)
+    indep = ind.policy_iteration(*dense(mdp))
+    res = lb.solve_exact(mdp)
+    assert res.converged
+    lo, hi = res.lower_values, res.upper_values
+    assert np.all(lo - indep.error <= indep.values), "lower_values above V*"
+    assert np.all(indep.values <= hi + indep.error), "upper_values below V*"
+    rmax = float(np.abs(mdp.rewards[mdp.allowed]).max(initial=0.0))
+    value_scale = rmax / (1.0 - lam)
+    assert np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
+    # error_bound's rounding slack is ROUNDING_ULPS eps max(1, max|V|): absolute below
+    # values of 1, hence the 1e-13 / (1 - lambda) term for the 1e-6 reward scale
+    width_cap = 2e-10 * value_scale + 1e-13 / (1.0 - lam)
+    assert float((hi - lo).max()) <= width_cap, "a vacuous bracket"
+
+
+@pytest.mark.parametrize("lam", [0.9, 0.99])
+def test_default_accuracy_on_values_of_order_one(lam):
+    """Values of order 1 at discounts up to 0.99 (rewards in [0, 1 - lambda]): the default
+    V* passes a 1e-9 absolute cross-check against an independent dense solve."""
+    mdp = lb.garnet(300, 3, 4, lam, seed=2, reward_range=(0.0, 1.0 - lam))
+    indep = ind.policy_iteration(*dense(mdp))
+    res = lb.solve_exact(mdp)
+    assert np.abs(res.values - indep.values).max() <= 1e-9 - indep.error
+    assert res.error_bound <= 1e-9

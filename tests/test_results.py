@@ -187,10 +187,12 @@ def test_dp_bracket_contains_v_star_and_is_tight(mdp, v_star, rtol):
     scale = np.abs(mdp.rewards).max() / (1 - mdp.discount)
     r = solve_exact(mdp, tol=None if rtol is None else rtol * scale)
     lo, hi = r.lower_values, r.upper_values
-    # the reference's own (generous) error is well below the DP's: 1e-11 against 7e-10
-    assert v_star.error < 0.05 * r.error_bound
-    assert (lo <= v_star.values - v_star.error).all(), (lo - v_star.values).max()
-    assert (v_star.values + v_star.error <= hi).all(), (v_star.values - hi).max()
+    # the reference's own (generous) error is below the DP's: 1e-11 against 3.4e-11 at the
+    # default tolerance (DP_RTOL max|R|), 1e-11 against 1e-4 x scale at rtol 1e-4
+    assert v_star.error < 0.5 * r.error_bound
+    # V* lies in [v_star - error, v_star + error]: the bracket must meet that interval
+    assert (lo <= v_star.values + v_star.error).all(), (lo - v_star.values).max()
+    assert (v_star.values - v_star.error <= hi).all(), (v_star.values - hi).max()
     # not vacuous: no wider than 2 error_bound plus a few ulps of the values
     width = hi - lo
     ulps = 4 * EPS * np.maximum(1.0, np.abs(r.values) + r.error_bound)

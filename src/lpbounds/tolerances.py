@@ -14,10 +14,26 @@ PROBABILITY_SUM_ATOL: float = 1e-9
 #: Probabilities above ``-PROBABILITY_NEGATIVE_ATOL`` are accepted (and clipped to 0).
 PROBABILITY_NEGATIVE_ATOL: float = 1e-12
 
-#: Default relative stopping tolerance of the exact DP solvers: the Bellman residual
-#: ``||T V - V||_inf`` of the returned ``V`` is at most ``DP_RTOL * scale`` with
-#: ``scale = max|R| / (1 - discount)`` (the largest possible ``|V*|``).
-DP_RTOL: float = 1e-10
+#: Default stopping tolerance of the exact DP solvers, relative to the largest reward:
+#: the Bellman residual ``||T V - V||_inf`` of the returned ``V`` is at most
+#: ``DP_RTOL * max|R|`` (never below the rounding floor, :func:`dp_default_tol`), so its
+#: certified error bound, residual / (1 - discount), is ``DP_RTOL`` of the value scale
+#: ``max|R| / (1 - discount)``: V* to about 11 significant digits of its largest
+#: possible size. Measured (2026-12-02, docs/benchmarks.md): with values of order 1 at
+#: discount 0.99 (FrozenLake 4x4 and 8x8) the error of the returned V* equals its bound,
+#: 2.9e-9 at 1e-10 and 2.9e-10 at 1e-11, so 1e-11 is the largest setting whose default
+#: V* passes a 1e-9 cross-check there; the cost over the former default (1e-10 of the
+#: value scale, 1e-9 of max|R| at discount 0.9) is 1-2 improvement sweeps on the patrol
+#: and the garnets.
+DP_RTOL: float = 1e-11
+
+#: Floor of the default DP tolerance in units of ``eps``: the residual of a sweep is
+#: computed with a rounding error of up to about ``(L + 3) eps max|V|`` (``L`` outcomes
+#: per row, ``max|V| <= max|R| / (1 - discount)``), so a tolerance below that may never
+#: be reached (at discount 0.9999, ``DP_RTOL * max|R|`` is 1e-15 of the value scale).
+#: The default is at least ``DP_FLOOR_ULPS (L + 3) eps max|R| / (1 - discount)``, 8
+#: times the worst-case rounding of the residual.
+DP_FLOOR_ULPS: float = 8.0
 
 #: Relative tolerance under which two Q-values count as tied in a greedy policy
 #: (``q >= max q - GREEDY_TIE_RTOL * max(1, |max q|)``); ties go to the lowest action.
@@ -41,22 +57,34 @@ LP_COMPARE_RTOL: float = 1e-6
 
 #: Relative tolerance of the exact DP that computes an exported LP's optimum
 #: (:mod:`lpbounds.studies.export`): the fixed point's Bellman residual is at most
-#: ``EXPORT_DP_RTOL * max|R| / (1 - lambda)``. A benchmark's reference must be far more
-#: accurate than the solvers it judges (HiGHS reaches 1e-13 to 1e-11 relative on the
-#: shipped models, see LP_CERT_RTOL); 1e-12 stays several hundred times above the rounding floor
-#: of a Bellman sweep (about (L + 3) eps max|V|), so MPI reaches it at every size.
+#: ``EXPORT_DP_RTOL * max|R|`` (never below the rounding floor of :func:`dp_default_tol`),
+#: a tenth of the default ``DP_RTOL``, so the reference is more accurate than a default
+#: ``solve_exact`` at every discount. A benchmark's reference must be far more accurate
+#: than the solvers it judges (HiGHS reaches 1e-13 to 1e-11 relative on the shipped
+#: models, see LP_CERT_RTOL). (Until the default accuracy was measured this was relative to
+#: the value scale ``max|R| / (1 - lambda)``, which at discount 0.99 left the reference's
+#: error bound at 1e-10 of the value scale, above a default solve's 1e-11.)
 EXPORT_DP_RTOL: float = 1e-12
 
 
 #: Rows whose exact sums are certified within this of 1 (``RowSums.delta``) are treated
 #: as stochastic by the exact DP's Porteus offset, which is then carried as a scalar
 #: (``T(u + c) = T u + lambda c``); its error ``lambda |c| delta`` is added to the reported
-#: residual. With ``|c| <= max|R| / (1 - lambda)`` that is at most 1e-12 of the value scale,
-#: 1 % of the default tolerance ``DP_RTOL``. Rows normalised in floating point sum to 1
-#: within ``(L - 1) eps`` and are certified within about ``2 (L + 1) eps`` (2.7e-15 for
-#: L = 5); rows summing to ``1 +- 1e-9`` (accepted, PROBABILITY_SUM_ATOL) are not, and the
-#: DP folds the offset into the iterate every sweep instead (dp.PorteusShift).
+#: residual, and kept below :data:`DP_OFFSET_CARRY_SHARE` of the tolerance (the offset is
+#: folded into the iterate whenever it would be more). Rows normalised in floating point
+#: sum to 1 within ``(L - 1) eps`` and are certified within about ``2 (L + 1) eps``
+#: (2.7e-15 for L = 5); rows summing to ``1 +- 1e-9`` (accepted, PROBABILITY_SUM_ATOL) are
+#: not, and the DP folds the offset into the iterate every sweep (dp.PorteusShift) and
+#: extrapolates with the rows' mean effective discount.
 DP_OFFSET_ROWSUM_ATOL: float = 1e-12
+
+#: The share of the stopping tolerance that the error of a carried Porteus offset,
+#: ``lambda |c| delta``, may take: beyond it the offset is folded into the iterate
+#: before the next sweep, so the added error never keeps the loop from reaching its
+#: tolerance (with ``|c|`` up to the value scale and ``delta`` up to
+#: DP_OFFSET_ROWSUM_ATOL it could be 1e-12 of the value scale, above the default
+#: tolerance at discounts from 0.9).
+DP_OFFSET_CARRY_SHARE: float = 1.0 / 16.0
 
 
 #: A partition's upper and lower bounds are reported out of order (``v*(i) - w*(i) <
@@ -92,6 +120,38 @@ TINY: float = 1e-300
 def dp_scale(rewards_absmax: float, discount: float) -> float:
     """Scale of the value function, ``max|R| / (1 - discount)`` (at least 1e-300)."""
     return max(float(rewards_absmax) / (1.0 - float(discount)), 1e-300)
+
+
+def dp_default_tol(
+    rewards_absmax: float,
+    discount: float,
+    n_outcomes: int,
+    rtol: float | None = None,
+    folds_offset: bool = False,
+) -> float:
+    """The exact DP's default residual tolerance: ``max(rtol max|R|, floor)``.
+
+    ``rtol`` is :data:`DP_RTOL` unless given (:data:`EXPORT_DP_RTOL` for an exported LP's
+    reference optimum). ``folds_offset``: the rows are not stochastic to rounding
+    (:data:`DP_OFFSET_ROWSUM_ATOL`), so the loops add the Porteus offset into the vector
+    after every sweep, and that addition's rounding (``eps max|V|``) is extrapolated by the
+    next shift (``lambda / (1 - lambda)``): the floor is then divided by ``1 - discount``
+    once more. Measured: rows summing to ``1 + 9e-10`` at discount 0.999 stalled at a
+    residual of ``2.6e-8``, 3.3 times ``DP_RTOL max|R|``, about ``eps max|V| / (1 - lambda)``.
+
+    ``floor = DP_FLOOR_ULPS (L + 3) eps max|R| / (1 - discount)`` with ``L =
+    n_outcomes`` (the most outcomes of a row): the smallest residual a sweep can be
+    trusted to reach at any discount (:data:`DP_FLOOR_ULPS`). The certified error bound
+    of the result is then at most ``DP_RTOL`` of the value scale where the floor does not
+    bind (discounts up to about ``1 - 5e-3`` for ``L <= 40``).
+    """
+    import numpy as np
+
+    scale = dp_scale(rewards_absmax, discount)
+    floor = DP_FLOOR_ULPS * (int(n_outcomes) + 3) * float(np.finfo(np.float64).eps) * scale
+    if folds_offset and discount < 1.0:
+        floor /= 1.0 - float(discount)
+    return max((DP_RTOL if rtol is None else float(rtol)) * float(rewards_absmax), floor)
 
 
 # ---------------------------------------------------------------------- NLP (eq. 25)
@@ -202,3 +262,17 @@ LP_VALUE_SCALE_MAX: float = 2.0**26
 #: below float64's largest number (1.8e308) for that; a cost of 1e300 on a small model
 #: (objective ~ 1e302) is accepted.
 LP_OBJECTIVE_MAX: float = 2.0**1016
+
+
+# ---------------------------------------------------------------------- plots
+#: :func:`lpbounds.plot.bounds` circles a state whose ``V*`` lies outside a bound given as a
+#: plain array (no certified bracket to judge by) only beyond ``PLOT_BOUND_RTOL * max(1,
+#: max|V*|)``: such arrays are typically fixed points computed to ``DP_RTOL`` of the value
+#: scale, so smaller excursions are their residual, not a broken bound.
+PLOT_BOUND_RTOL: float = 1e-9
+
+#: :func:`lpbounds.plot.nlp_bracket` accepts a reference LP as solved for the NLP's cost
+#: when ``|c'values - objective| <= PLOT_COST_MATCH_RTOL * (|c|'|values| + |objective|)``:
+#: the objective is ``c'x`` recomputed in floating point (a few ulps per term), while another
+#: cost changes it by a share of the value scale.
+PLOT_COST_MATCH_RTOL: float = 1e-9

@@ -10,8 +10,9 @@ the LPs (RLP's least feasible point is the fixed point of its rows, Fact 1 in
 Stopping rule and error bound
 -----------------------------
 The solvers stop when the Bellman residual of the vector they return,
-``||T V - V||_inf``, is at most ``tol`` (default ``DP_RTOL * max|R| / (1 - lambda)``),
-and report that residual, measured on the returned vector. It implies
+``||T V - V||_inf``, is at most ``tol`` (default ``DP_RTOL * max|R|``, at least a rounding
+floor: :func:`lpbounds.tolerances.dp_default_tol`), and report that residual, measured
+on the returned vector. It implies
 
 * ``||V - V*||_inf <= residual / (1 - kappa)`` (reported as ``error_bound``), and
 * ``||T V - V*||_inf <= kappa / (1 - kappa) * residual`` for one more application of T,
@@ -120,7 +121,13 @@ from ..results import Result, outward_bracket
 from ..rows import BellmanRows, PostDecisionRows, SweepOperator
 from ..status import Status
 from ..stochastic import RowSums, bellman_margin
-from ..tolerances import DP_OFFSET_ROWSUM_ATOL, DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
+from ..tolerances import (
+    DP_OFFSET_CARRY_SHARE,
+    DP_OFFSET_ROWSUM_ATOL,
+    GREEDY_TIE_RTOL,
+    dp_default_tol,
+    error_bound,
+)
 from ..validation import (
     MAX_VALUE_SCALE,
     check_array,
@@ -197,17 +204,20 @@ def post_decision_rows(model: Model) -> PostDecisionRows | None:
 
 
 def _default_tol(rows: BellmanRows | PostDecisionRows, tol: float | None) -> float:
+    """``tol`` checked, or :func:`lpbounds.tolerances.dp_default_tol` of the rows."""
     if tol is not None:
         return check_real("tol", tol, lo=0.0, lo_open=True)
     if isinstance(rows, PostDecisionRows):
         # disallowed rewards are stored as 0, so this is max|R| over the allowed pairs,
-        # the same number as on the exact rows
-        scale = dp_scale(rows.reward_absmax, rows.discount)
+        # the same number as on the exact rows; the outcomes per pair are those per row
+        rmax, n_out = rows.reward_absmax, int(rows.outcomes.shape[1])
     else:
-        scale = dp_scale(float(np.abs(rows.reward).max(initial=0.0)), rows.discount)
-    if not np.isfinite(scale):  # refused by FiniteMDP / from_arrays (MAX_VALUE_SCALE)
-        raise ValidationError(f"the value scale max|R| / (1 - discount) = {scale} overflows")
-    return DP_RTOL * scale
+        rmax, n_out = float(np.abs(rows.reward).max(initial=0.0)), rows.n_outcomes
+    folds = rows.row_sums().delta > DP_OFFSET_ROWSUM_ATOL  # PorteusShift.fold
+    tol_ = dp_default_tol(rmax, rows.discount, n_out, folds_offset=folds)
+    if not np.isfinite(tol_):  # refused by FiniteMDP / from_arrays (MAX_VALUE_SCALE)
+        raise ValidationError(f"the value scale max|R| / (1 - discount) of {rmax} overflows")
+    return tol_
 
 
 def _initial(initial: Any, n: int) -> np.ndarray:
@@ -584,7 +594,10 @@ def solve_exact(
         residual: see "Inexact policy iteration" in the module docstring; it is never
         chosen for you: MPI was faster on every large model measured).
     tol : float, optional
-        Stop when ``||T V - V||_inf <= tol``; default ``1e-10 * max|R| / (1 - lambda)``.
+        Stop when ``||T V - V||_inf <= tol``; default ``1e-11 * max|R|``
+        (:func:`lpbounds.tolerances.dp_default_tol`: ``DP_RTOL * max|R|``, never below
+        the residual's rounding floor), so that the certified ``error_bound`` is about
+        ``1e-11`` of the value scale ``max|R| / (1 - lambda)``.
     max_iter : int
         Limit on improvement steps.
     eval_sweeps : int or "auto"
@@ -924,10 +937,12 @@ class PorteusShift:
       < 1`` whenever ``lambda hi < 1``, which the model's validation guarantees.
     """
 
-    def __init__(self, discount: float, sums: RowSums) -> None:
+    def __init__(self, discount: float, sums: RowSums, tol: float = np.inf) -> None:
         self.lam = float(discount)
         self.delta = sums.delta
         self.fold = self.delta > DP_OFFSET_ROWSUM_ATOL
+        # the most a carried offset may add to the residual (DP_OFFSET_CARRY_SHARE)
+        self.carry_limit = DP_OFFSET_CARRY_SHARE * float(tol)
         if self.fold:
             km = self.lam * 0.5 * (sums.lo + sums.hi)
             self.gain = km / (1.0 - km)
@@ -946,8 +961,13 @@ class PorteusShift:
         return res, c_next
 
     def settle(self, u: np.ndarray, c: float) -> float:
-        """The offset to carry into the next sweep: ``c``, or 0 after ``u += c`` (folding)."""
-        if self.fold and c != 0.0:
+        """The offset to carry into the next sweep: ``c``, or 0 after ``u += c`` (folding).
+
+        The offset is folded when the rows are not stochastic to rounding, and also when
+        carrying it would add more than ``DP_OFFSET_CARRY_SHARE`` of the tolerance to the
+        next residual (``lambda |c| delta``), so that residual can still reach it.
+        """
+        if c != 0.0 and (self.fold or self.lam * abs(c) * self.delta > self.carry_limit):
             u += c
             return 0.0
         return c
@@ -1015,7 +1035,7 @@ def mpi_loop(
     LoopResult
         ``values`` is ``v`` or the other vector, ``arg`` from ``ops.new_arg()``.
     """
-    shift = PorteusShift(ops.discount, ops.row_sums())
+    shift = PorteusShift(ops.discount, ops.row_sums(), tol)
     plan = EvalPlan(check_eval_sweeps(eval_sweeps))
     work = ops.new_work()  # reused by every sweep of this solve
     improve = _improvement(ops, game, work)
@@ -1277,7 +1297,7 @@ def evaluation_loop(
     -------
     PolicyLoop
     """
-    shift = PorteusShift(ops.discount, ops.row_sums())
+    shift = PorteusShift(ops.discount, ops.row_sums(), tol)
     sweep = functools.partial(ops.sweep_policy, sel, work=ops.new_work())
     u = np.zeros(ops.n_vars)
     buf = ops.new_vector()

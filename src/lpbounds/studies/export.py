@@ -11,7 +11,7 @@ lpbounds and cvxpy, with what is needed to judge their answers:
   ``r0 .. r{R-1}`` (HiGHS' default names): column ``c{j}`` is ``x[j]``, row ``r{k}`` is
   Bellman row ``k`` of ``rows.npz``;
 * ``optimum.npy``: the exact optimum (the fixed point, float64, one entry per column in
-  column order), computed by exact DP to ``EXPORT_DP_RTOL * max|R| / (1 - lambda)`` and
+  column order), computed by exact DP to a residual of ``EXPORT_DP_RTOL * max|R|`` and
   certified from the point alone (:func:`lpbounds.certification.certificate.certify`): the true
   optimum
   lies within the sidecar's ``certificate`` bracket of it;
@@ -51,7 +51,7 @@ from ..errors import ConvergenceError, OutputError, ValidationError
 from ..outputs import MANIFEST, AtomicDirectory, file_sha256, run_metadata
 from ..rows import BellmanRows
 from ..status import Status
-from ..tolerances import EXPORT_DP_RTOL, LP_CERT_RTOL, dp_scale
+from ..tolerances import EXPORT_DP_RTOL, LP_CERT_RTOL, dp_default_tol
 from ..validation import check_vector
 
 __all__ = [
@@ -340,10 +340,12 @@ def _certificate_summary(cert: Certificate, x: np.ndarray) -> dict[str, Any]:
 def exact_optimum(form: Any, rtol: float = EXPORT_DP_RTOL) -> Optimum:
     """The formulation's solver-free optimum (its ``fixed_point``) and its certificate.
 
-    The fixed point is computed to ``rtol * max|R| / (1 - lambda)``; a DP that does not
+    The fixed point is computed to a residual of ``rtol * max|R|``, never below the
+    rounding floor of :func:`lpbounds.tolerances.dp_default_tol`; a DP that does not
     converge gives ``x = None`` with the reason (no optimum is invented)."""
     rows = form.rows
-    tol = rtol * dp_scale(float(np.abs(rows.reward).max(initial=0.0)), rows.discount)
+    rmax = float(np.abs(rows.reward).max(initial=0.0))
+    tol = dp_default_tol(rmax, rows.discount, rows.n_outcomes, rtol=rtol)
     t0 = time.perf_counter()
     try:
         x = np.ascontiguousarray(np.asarray(form.fixed_point(tol), dtype=np.float64).ravel())
