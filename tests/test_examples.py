@@ -23,6 +23,11 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
     "hard_vs_soft_aggregation": (["--steps", "11"], ["hard_vs_soft_aggregation.png"]),
     "nlp_bracket": (["--rounds", "30"], ["nlp_bracket.png"]),
     "patrol_bounds": ([], ["patrol_bounds.png"]),
+    "plots": (
+        [],
+        [f"plot_{k}.png" for k in ("bounds", "bounds_partitions", "gap", "nlp_bracket")]
+        + ["plot_dp_residuals.png"],
+    ),
 }
 
 

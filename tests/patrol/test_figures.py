@@ -1,4 +1,9 @@
-"""Figure data selections (checked against plain loops over the states) and PNG output."""
+"""Figure data selections (checked against plain loops over the states) and PNG output.
+
+Every figure is also looked at as an image: each legend entry must show in the rendered
+pixels outside the legend (:func:`tests._figures.assert_legend_visible`), so an element drawn
+under another one, clipped or off the axes fails, whatever the artist tree holds.
+"""
 
 from __future__ import annotations
 
@@ -10,6 +15,8 @@ import pytest
 from lpbounds.patrol import figures as figs
 from lpbounds.patrol.model import PatrolModel
 from lpbounds.patrol.params import PatrolParams
+
+from .._figures import assert_legend_visible
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -75,7 +82,16 @@ def test_bounds_partitions_selection(model):
         assert (l, w, d, tb) == (k % n, 1 if k < n else -1, 0, 2) and all(a)
 
 
-def test_every_plot_writes_a_png(model, tmp_path):
+def test_every_plot_writes_a_png(model, tmp_path, monkeypatch):
+    """Each figure is written as a PNG, and each shows every legend entry it names."""
+    seen = {}
+    save = figs.save_figure
+
+    def check_then_save(fig, path):
+        seen[Path(path).name] = assert_legend_visible(fig)
+        return save(fig, path)
+
+    monkeypatch.setattr(figs, "save_figure", check_then_save)
     p = model.params
     comps = model.state_components()
     pc = model.partition_components()
@@ -98,6 +114,9 @@ def test_every_plot_writes_a_png(model, tmp_path):
     ]
     for f in out:
         assert _is_png(f), f
+    assert sorted(seen) == [f"f{k}.png" for k in range(2, 8)]
+    # the random values fall outside the random bounds: Figure 5 circles them, and says so
+    assert any(label.startswith("outside the bounds") for label in seen["f5.png"])
 
 
 # ---------------------------------------------------------------------- what each figure claims
@@ -168,20 +187,32 @@ def test_figure3_plots_non_increasing_values_along_each_chain(small, captured):
         assert y[0] - y[-1] > 100 * small["tol"]  # it does decrease, not only stay flat
     title = captured[0].axes[0].get_title()
     assert "all stations alerted" in title and "d = 0" in title and "w = +1" in title
+    assert_legend_visible(captured[0], expect=("UAV at station",))
+
+
+def _min_levels(line):
+    """The heights of a ``min V*`` line: one segment per partition, NaN between them."""
+    y = np.asarray(line.get_ydata(), dtype=np.float64)
+    seg = y[np.isfinite(y)].reshape(-1, 2)
+    assert (seg[:, 0] == seg[:, 1]).all(), "each segment is horizontal"
+    return seg[:, 0]
 
 
 def test_figure4_min_over_each_partition_is_non_increasing(small, captured):
     st = small["params"].stations
     figs.plot_min_value_partitions(small["comps"], st, small["vstar"], "f4.png")
-    ax = captured[0].axes[0]
-    mins = [c for c in ax.collections]  # hlines: one LineCollection per partition
-    levels = [float(np.asarray(c.get_segments())[0][0][1]) for c in mins]
-    assert len(levels) == small["params"].Gamma - 1
+    fig = captured[0]
+    (line,) = _lines(fig, "min V*")
+    levels = _min_levels(line)
+    assert levels.size == small["params"].Gamma - 1
     assert (np.diff(levels) <= small["tol"]).all()
     # each green level is the least V* of the states plotted in its partition
     idx, taubar, _ = figs.select_min_value_partitions(small["comps"], st)
     want = [small["vstar"][idx[taubar == t]].min() for t in np.unique(taubar)]
     assert np.allclose(levels, want, rtol=0, atol=1e-15)
+    (dots,) = _lines(fig, "V*(x)")
+    assert line.get_zorder() > dots.get_zorder(), "the line the caption names is on top"
+    assert_legend_visible(fig, expect=("V*(x)", "min V* over the partition"))
 
 
 def test_figure5_bounds_sandwich_every_plotted_state(small, captured):
@@ -197,6 +228,9 @@ def test_figure5_bounds_sandwich_every_plotted_state(small, captured):
     assert x.size > 0
     up_y, low_y = np.asarray(up.get_ydata()), np.asarray(low.get_ydata())
     assert (low_y[x - 1] <= y + small["tol"]).all() and (y <= up_y[x - 1] + small["tol"]).all()
+    # the true V* lies inside its bounds: nothing is circled, and every entry shows
+    counts = assert_legend_visible(captured[0], expect=("V*(x)", "V_up", "V_low"))
+    assert not any(label.startswith("outside") for label in counts)
 
 
 def test_figure6_vsub_never_exceeds_vstar(small, captured):
@@ -206,6 +240,7 @@ def test_figure6_vsub_never_exceeds_vstar(small, captured):
     (sub,) = _lines(captured[0], "V_sub")
     assert np.asarray(vs.get_ydata()).size > 0
     assert (np.asarray(sub.get_ydata()) <= np.asarray(vs.get_ydata()) + small["tol"]).all()
+    assert_legend_visible(captured[0], expect=("V*", "V_sub"))
 
 
 def test_figure3_says_so_when_values_increase(small, captured):
@@ -218,3 +253,4 @@ def test_figure3_says_so_when_values_increase(small, captured):
     title = captured[0].axes[0].get_title()
     assert "non-increasing" not in title and "1 increase(s)" in title
     assert _lines(captured[0], "increase")
+    assert_legend_visible(captured[0], expect=("increase",))

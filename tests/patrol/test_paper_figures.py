@@ -4,14 +4,17 @@ The paper's figures are for its instance only (``models/patrol-paper.toml``: N =
 stations 0, 3, 7, 11, D = 5, Gamma = 15; 2,048,000 states, 8,900 partitions), so they are
 checked at that size:
 
-* fast: ``|S|`` and ``M`` (Section 6); Table 1's row of ``pi_s`` (greedy w.r.t. the lower
-  bound ``w*``, eq. 30), which needs the partition bounds only (a second), acted out on the
-  fly on the reproduction's alert sequences (5 seeds x 60,000 steps); the Section 6 text
-  ("almost 90 %" of the serviced alerts get the full dwell of 5 loiters); and the saved
+* fast: ``|S|`` and ``M`` (Section 6); Figure 4 at the paper's size, drawn from the
+  certified lower bound (its ``min V*`` line must show above 224 crowded dots); Table 1's
+  row of ``pi_s`` (greedy w.r.t. the lower bound ``w*``, eq. 30), which needs the partition
+  bounds only (a second), acted out on the fly on the reproduction's alert sequences (5
+  seeds x 60,000 steps); the Section 6 text ("almost 90 %" of the serviced alerts get the
+  full dwell of 5 loiters); and the saved
   paper-scale record of ``benchmarks/bench_greedy_mc.py`` against both;
 * slow (``-m slow``; excluded by default, see pyproject's ``addopts``): the whole
   reproduction at the paper's size, with exact ``V*`` and ``pi*``, against both rows of
-  Table 1 and the Section 6 statements on the bounds.
+  Table 1 and the Section 6 statements on the bounds, its figures drawn and each legend
+  entry seen in their pixels.
 
 The same statements are checked on the small instance in ``test_reproduce.py``
 (``test_section_6_statements_on_the_small_instance``), where Table 1's numbers themselves
@@ -44,9 +47,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from lpbounds.patrol import figures as figs
 from lpbounds.patrol.greedy_mc import greedy_table1, partition_bounds
 from lpbounds.patrol.instance import params_from_instance
+from lpbounds.patrol.model import PatrolModel
 from lpbounds.patrol.reproduce import PAPER_TABLE1
+
+from .._figures import assert_legend_visible
 
 PAPER = "models/patrol-paper.toml"
 ROOT = Path(__file__).resolve().parents[2]
@@ -105,16 +112,59 @@ def test_the_constants_are_the_papers():
 
 
 @pytest.fixture(scope="module")
-def pi_s_table1():
-    """Table 1 of pi_s at the paper's size: w* of LBLP from the partitions (certified), pi_s
-    greedy w.r.t. it, acted out on the reproduction's 5 alert sequences of 60,000 steps."""
+def paper_bounds():
+    """The paper's parameters and its partition bounds w* (LBLP) and v* (UBLP), certified."""
     params = params_from_instance(PAPER)
     bounds = partition_bounds(params)
     # the bounds are certified fixed points, and not vacuous
     assert bounds.lower.shape == bounds.upper.shape == (PAPER_PARTITIONS,)
     assert 0 < bounds.lower_error < 1e-8 and 0 < bounds.upper_error < 1e-8
     assert (bounds.lower <= bounds.upper + bounds.lower_error + bounds.upper_error).all()
+    return params, bounds
+
+
+@pytest.fixture(scope="module")
+def pi_s_table1(paper_bounds):
+    """Table 1 of pi_s at the paper's size: w* of LBLP from the partitions (certified), pi_s
+    greedy w.r.t. it, acted out on the reproduction's 5 alert sequences of 60,000 steps."""
+    params, bounds = paper_bounds
     return greedy_table1(params, bounds.lower, steps=60_000, seeds=(1, 2, 3, 4, 5))
+
+
+def _keep_figures(monkeypatch, save: bool = True) -> list:
+    """The figures the patrol's plot functions draw (and, with ``save``, still write)."""
+    kept = []
+    write = figs.save_figure
+
+    def keep(fig, path):
+        kept.append((Path(path).name, fig))
+        return write(fig, path) if save else Path(path)
+
+    monkeypatch.setattr(figs, "save_figure", keep)
+    return kept
+
+
+def test_figure4_at_the_papers_size_shows_its_min_line(paper_bounds, monkeypatch):
+    """Figure 4's 224 states (A = 1001, d = 0, w = +1, l = 0) at the paper's size, drawn
+    from Phi w*: constant on each partition, so every dot sits on the partition's
+    ``min`` line, the crowding under which the paper's figure lost that line. Drawn
+    above the dots, the line shows in the image; pushed below them, it does not (the check
+    sees what a reader sees)."""
+    params, bounds = paper_bounds
+    pm = PatrolModel(params)
+    comps = pm.state_components()
+    values = bounds.lower[np.asarray(pm.partition().labels)]
+    kept = _keep_figures(monkeypatch, save=False)
+    figs.plot_min_value_partitions(comps, params.stations, values, "fig4.png")
+    ((_, fig),) = kept
+    idx, _, _ = figs.select_min_value_partitions(comps, params.stations)
+    assert idx.size == 224, "tau_1, tau_4 in 1..15 with max >= 2: 15 * 15 - 1"
+    counts = assert_legend_visible(fig, expect=("V*(x)", "min V* over the partition"))
+    assert counts["min V* over the partition"] > 1000
+    (line,) = [ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("min V*")]
+    line.set_zorder(1)  # under the dots (zorder 3), as matplotlib's default order drew it
+    with pytest.raises(AssertionError, match="min V\\* over the partition"):
+        assert_legend_visible(fig)
 
 
 def test_table1_pi_s_at_the_papers_size(pi_s_table1):
@@ -155,12 +205,19 @@ def test_saved_paper_scale_record_matches_the_paper_and_this_run(pi_s_table1):
 
 # ---------------------------------------------------------------------- the whole run
 @pytest.mark.slow
-def test_full_reproduction_against_table_1_and_section_6(tmp_path):
+def test_full_reproduction_against_table_1_and_section_6(tmp_path, monkeypatch):
     """``lpbounds reproduce`` at the paper's size (exact V*, both policies; about a minute
-    and 1.5 GB on 2 cores): both rows of Table 1 and Section 6's statements."""
+    and 1.5 GB on 2 cores): both rows of Table 1 and Section 6's statements; its figures
+    written, every legend entry visible in each."""
     from lpbounds.patrol.reproduce import reproduce
 
-    rep = reproduce(PAPER, tmp_path / "out", figures=False, general="residual")
+    kept = _keep_figures(monkeypatch)
+    rep = reproduce(PAPER, tmp_path / "out", figures=True, general="residual")
+    names = [name for name, _ in kept]
+    assert {f"fig{k}" for k in range(2, 8)} <= {name.split("_")[0] for name in names}, names
+    for name, fig in kept:
+        counts = assert_legend_visible(fig)
+        assert not any(label.startswith("outside the bounds") for label in counts), name
     s = rep.summary
     assert (s["n_states"], s["n_partitions"]) == (PAPER_STATES, PAPER_PARTITIONS)
     mc = s["monte_carlo"]

@@ -699,11 +699,11 @@ def plot_gap_shares(rows: list[SizeResult], path: str | Path) -> Path:
     against the number of states."""
     from matplotlib.ticker import NullLocator
 
-    from .figures import plt, save_figure
+    from .figures import save_figure, subplots
 
     n = [r.n_states for r in rows]
     ticks = [f"{r.n_states:.2g}\nm = {r.m}" for r in rows]
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, (ax1, ax2) = subplots(1, 2, figsize=(10, 4))
     for key, label, mk in (
         ("upper_mean", "mean v* - V* (UBLP side)", "v"),
         ("lower_mean", "mean V* - w* (LBLP side)", "^"),

@@ -1,4 +1,4 @@
-r"""Figures 2-7 of the paper (Sections 4-6) as PNG files (matplotlib, Agg backend).
+r"""Figures 2-7 of the paper (Sections 4-6) as PNG files.
 
 Numbering follows the paper's LaTeX source (Figure 1 is the scenario sketch):
 
@@ -18,20 +18,25 @@ Numbering follows the paper's LaTeX source (Figure 1 is the scenario sketch):
   serviced alert under ``pi*`` and ``pi_s``.
 
 The ``select_*`` functions return the plotted data (so tests can check it against an
-independent selection); the ``plot_*`` functions write one PNG each.
+independent selection); the ``plot_*`` functions write one PNG each. Figures 4 and 5 are
+drawn by :func:`lpbounds.plot.bounds`, the same plot for any model.
+
+Figures are built with matplotlib's object API (:func:`subplots`: a
+:class:`~matplotlib.figure.Figure` on an Agg canvas), never through pyplot, so importing
+this module or drawing a figure leaves the session's backend as it was (a notebook keeps
+its own); matplotlib itself is imported when a figure is drawn.
 """
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
+from .. import plot
+from ..model.partition import Partition
 from ..tolerances import FIGURE_MONOTONE_RTOL
 
 __all__ = [
@@ -46,9 +51,35 @@ __all__ = [
     "select_bounds_partitions",
     "select_min_value_partitions",
     "select_ordered_states",
+    "subplots",
 ]
 
 _DPI = 130
+
+
+def subplots(nrows: int = 1, ncols: int = 1, **kwargs: Any) -> tuple[Any, Any]:
+    """A new figure on an Agg canvas and its axes, as :func:`matplotlib.pyplot.subplots`
+    returns them, without pyplot (no backend is selected or changed).
+
+    Parameters
+    ----------
+    nrows, ncols : int
+        The grid of axes.
+    **kwargs
+        ``figsize``, ``dpi`` and ``layout`` go to the figure; the rest (``sharex``,
+        ``gridspec_kw``, ...) to :meth:`matplotlib.figure.Figure.subplots`.
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    axes : matplotlib.axes.Axes or array of Axes
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(**{k: kwargs.pop(k) for k in ("figsize", "dpi", "layout") if k in kwargs})
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
 
 
 def save_figure(fig: Any, path: str | Path) -> Path:
@@ -72,7 +103,9 @@ def save_figure(fig: Any, path: str | Path) -> Path:
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(p, dpi=_DPI)
-    plt.close(fig)
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:  # a figure pyplot made is released; ours are not registered
+        pyplot.close(fig)
     return p
 
 
@@ -81,9 +114,16 @@ def plot_information(params: Any, path: str | Path) -> Path:
     """Figure 2: ``I(d)`` (nats) for ``0 <= d <= D + 1``, with the integer dwells marked."""
     d = np.linspace(0.0, params.D + 1, 200)
     di = np.arange(params.D + 1)
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    fig, ax = subplots(figsize=(6.4, 4.0))
     ax.plot(d, params.information(d), color="tab:blue", label=r"$\mathcal{I}(d)$")
-    ax.plot(di, params.information(di), "o", color="tab:blue", label=f"d = 0..D (D = {params.D})")
+    ax.plot(
+        di,
+        params.information(di),
+        "o",
+        color="tab:orange",
+        zorder=3,
+        label=f"d = 0..D (D = {params.D})",
+    )
     ax.set_xlabel("dwell time d (loiters)")
     ax.set_ylabel("information gain I(d) [nats]")
     ax.set_title("Figure 2: value of information gained vs dwell time")
@@ -135,7 +175,7 @@ def plot_ordered_states(
     UAV location, dotted lines where the maximum delay (the partition) changes."""
     sel = select_ordered_states(comps, stations)
     m = comps.shape[1] - 3
-    fig, ax = plt.subplots(figsize=(8.0, 4.6))
+    fig, ax = subplots(figsize=(8.0, 4.6))
     markers = "osD^v<>px*"
     taubar = np.zeros(0, dtype=np.int64)
     # an increase beyond rounding would contradict Claim 2: marked, and the title says so
@@ -228,37 +268,30 @@ def select_min_value_partitions(
 def plot_min_value_partitions(
     comps: np.ndarray, stations: Any, vstar: np.ndarray, path: str | Path
 ) -> Path:
-    """Figure 4: ``V*`` of every state (dots) and ``min V*`` per partition (green)."""
+    """Figure 4: ``V*`` of every state (dots) and ``min V*`` per partition (green, drawn
+    above the dots: :func:`lpbounds.plot.bounds`)."""
     idx, taubar, a = select_min_value_partitions(comps, stations)
-    fig, ax = plt.subplots(figsize=(8.0, 4.2))
-    x = np.arange(idx.size)
-    ax.plot(
-        x, vstar[idx], "o", ms=3.5, color="tab:blue", zorder=3, label="V*(x), x in the partition"
-    )
+    fig, ax = subplots(figsize=(8.0, 4.2))
+    legend = {"loc": "lower left", "fontsize": 8}
     if idx.size:
-        levels, start = np.unique(taubar, return_index=True)
+        # the plotted states' partitions: for fixed l, w, d and A, the maximum delay
+        levels, group = np.unique(taubar, return_inverse=True)
+        plot.bounds(
+            Partition(group),
+            vstar[idx],
+            order="index",
+            within="given",
+            ax=ax,
+            legend=legend,
+        )
+        start = np.flatnonzero(np.r_[True, np.diff(group) != 0])
         ends = np.r_[start[1:], idx.size]
+        top = ax.get_ylim()[1]
         for k, (s0, e0) in enumerate(zip(start, ends, strict=True)):
-            vmin = vstar[idx[s0:e0]].min()
-            ax.hlines(
-                vmin,
-                s0 - 0.4,
-                e0 - 0.6,
-                color="green",
-                lw=2,
-                zorder=4,  # above the dots: the line is what the paper's caption names
-                label="min V* over the partition" if k == 0 else "_nolegend_",
-            )
-            if k:
-                ax.axvline(s0 - 0.5, color="grey", ls=":", lw=0.7)
-            ax.text(
-                (s0 + e0 - 1) / 2,
-                ax.get_ylim()[1],
-                str(levels[k]),
-                ha="center",
-                va="bottom",
-                fontsize=7,
-            )
+            ax.text((s0 + e0 - 1) / 2, top, str(levels[k]), ha="center", va="bottom", fontsize=7)
+    else:
+        ax.plot([], [], "o", ms=3.5, color="tab:blue", label="V*(x), x in the partition")
+        ax.legend(**legend)
     code = "".join(str(v) for v in a)
     ax.set_xlabel(r"states grouped by partition, max delay $\bar\tau$ = 2..Γ (labels on top)")
     ax.set_ylabel("V*")
@@ -268,7 +301,6 @@ def plot_min_value_partitions(
         fontsize=10,
         pad=14,
     )
-    ax.legend(loc="lower left", fontsize=8)
     fig.tight_layout()
     return save_figure(fig, path)
 
@@ -297,28 +329,30 @@ def plot_bounds(
     N: int,
     path: str | Path,
 ) -> Path:
-    """Figure 5: ``V_up``, ``V_low`` and ``V*`` (every member state) on the 2N partitions."""
+    """Figure 5: ``V_up``, ``V_low`` and ``V*`` (every member state) on the 2N partitions
+    (:func:`lpbounds.plot.bounds`, one x per partition)."""
     parts = select_bounds_partitions(pcomps, N)
-    fig, ax = plt.subplots(figsize=(9.0, 4.4))
-    pos = np.full(pcomps.shape[0], -1)
-    pos[parts] = np.arange(parts.size)
-    member = pos[labels]
-    xs = np.flatnonzero(member >= 0)
-    ax.plot(
-        member[xs] + 1,
-        vstar[xs],
-        "o",
-        ms=3.5,
-        color="tab:blue",
-        alpha=0.7,
-        zorder=3,
-        label="V*(x), x in the partition",
+    fig, ax = subplots(figsize=(9.0, 4.4))
+    line = {"ms": 4, "lw": 1, "drawstyle": "default"}
+    plot.bounds(
+        labels,
+        vstar,
+        lower,
+        upper,
+        partitions=parts[parts >= 0],
+        layout="partitions",
+        within="given",
+        ax=ax,
+        dots={"alpha": 0.7},
+        upper_line={**line, "marker": "v", "color": "tab:red", "label": "V_up = Φ v* (UBLP)"},
+        lower_line={**line, "marker": "^", "color": "tab:green", "label": "V_low = Φ w* (LBLP)"},
+        min_line=None,
+        legend={"loc": "upper center", "bbox_to_anchor": (0.5, -0.16), "ncol": 3, "fontsize": 8},
     )
     k = np.arange(1, parts.size + 1)
-    ax.plot(k, upper[parts], "v-", color="tab:red", ms=4, lw=1, label="V_up = Φ v* (UBLP)")
-    ax.plot(k, lower[parts], "^-", color="tab:green", ms=4, lw=1, label="V_low = Φ w* (LBLP)")
     ax.axvline(N + 0.5, color="grey", ls=":", lw=0.8)
-    ax.set_xticks(k[:: max(1, N // 8)])
+    ticks = k[:: max(1, N // 8)]
+    ax.set_xticks(ticks, [str(t) for t in ticks])
     ax.set_xlabel(
         f"partition number (1..{N}: clockwise l = 0..{N - 1}; {N + 1}..{2 * N}: counter-clockwise)"
     )
@@ -328,7 +362,6 @@ def plot_bounds(
         r"(d = 0, $\bar\tau$ = 2, all stations alerted)",
         fontsize=10,
     )
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     return save_figure(fig, path)
@@ -351,7 +384,7 @@ def plot_vsub(
     xs = np.flatnonzero(member >= 0)
     order = np.lexsort((vstar[xs], member[xs]))
     xs = xs[order]
-    fig, (ax, ax2) = plt.subplots(
+    fig, (ax, ax2) = subplots(
         2, 1, figsize=(9.0, 5.6), sharex=True, gridspec_kw={"height_ratios": [2, 1]}
     )
     x = np.arange(xs.size)
@@ -382,7 +415,7 @@ def plot_histograms(
     delays: dict[str, np.ndarray], loiters: dict[str, np.ndarray], path: str | Path
 ) -> Path:
     """Figure 7: histograms (fraction of serviced alerts) of the delay and the loiters."""
-    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(8.0, 6.4))
+    fig, (ax, ax2) = subplots(2, 1, figsize=(8.0, 6.4))
     names = list(delays)
     colors = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
     width = 0.8 / max(1, len(names))
