@@ -78,3 +78,70 @@ def test_a_model_that_is_not_a_regular_file_is_named(tmp_path, kind):
         ValidationError, match=re.escape(f"not a regular file: '{path}' (a {kind})")
     ):
         lb.load_instance(path)
+
+
+# ---------------------------------------------------------------------- names of the shelf
+SHELF = [
+    "forest",
+    "gridworld",
+    "queue",
+    "inventory",
+    "savings",
+    "frozenlake",
+    "taxi",
+    "cliffwalking",
+]
+
+
+@pytest.mark.parametrize("name", SHELF)
+def test_shelf_names_resolve_like_garnet_small(name, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # no ./models here: the packaged files
+    from lpbounds.model.instances import packaged_models_dir, resolve_instance_path
+
+    expected = packaged_models_dir() / f"{name}.toml"
+    for spelling in (name, f"{name}.toml", f"models/{name}.toml"):
+        assert resolve_instance_path(spelling) == expected
+    inst = lb.load_instance(name)
+    assert inst.name == name and inst.has_partition  # loaded lazily: nothing built yet
+    assert inst.config["about"]["source"]
+
+
+def test_unknown_name_lists_the_packaged_models():
+    with pytest.raises(ValidationError) as exc:
+        lb.load_instance("forrest")
+    msg = str(exc.value)
+    assert "no instance file 'forrest'" in msg
+    assert "forest, frozenlake, garnet-paper-scale, garnet-small, gridworld" in msg
+
+
+def test_shelf_builders_are_in_lpbounds_instances():
+    for name in ["forest", "gridworld", "admission_queue", "inventory", "savings"]:
+        assert callable(getattr(lb.instances, name))
+    assert lb.instances.forest().n_states == 3
+
+
+def test_explicit_model_and_labels_partition():
+    """``kind = "explicit"``: the two-state model of conftest, V* by its closed form."""
+    from .conftest import two_state_closed_form
+
+    table = {
+        "model": {
+            "kind": "explicit",
+            "successors": [[[0], [1]], [[1], [1]]],
+            "probabilities": [1.0],
+            "rewards": [[1.0, 0.0], [2.0, 0.0]],
+            "allowed": [[True, True], [True, False]],
+            "discount": 0.8,
+        },
+        "partition": {"kind": "labels", "labels": [0, 0]},
+    }
+    inst = lb.load_instance(table)
+    res = lb.solve_exact(inst.mdp(), "pi")
+    assert res.values == pytest.approx(two_state_closed_form(0.8), abs=1e-12)
+    assert inst.partition().n_partitions == 1
+    bad = {**table, "partition": {"kind": "labels", "labels": [0, 1, 2]}}
+    with pytest.raises(ValidationError, match=r"labels has 3 entries; the model has 2 states"):
+        lb.load_instance(bad).partition()
+    bad = {"model": {**table["model"], "rewards": [[1.0, 0.0]]}}
+    with pytest.raises(ValidationError, match=r"^\[model\] .*rewards"):
+        lb.load_instance(bad).mdp()

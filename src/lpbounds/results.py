@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .status import Status
+from .text import fmt_sci
 
 if TYPE_CHECKING:  # annotations only
     import pandas as pd
@@ -78,10 +79,13 @@ def outward_bracket(values: Any, error_bound: float) -> tuple[np.ndarray, np.nda
 
 
 def _fmt(x: Any, spec: str = ".3e") -> str:
-    """A number for display (``None`` as "none")."""
+    """A number for display (``None`` as "none"); an ``.Ne`` spec as
+    :func:`~lpbounds.text.fmt_sci` writes it (``4.337e-1``, not ``4.337e-01``)."""
     if x is None:
         return "none"
     try:
+        if spec.endswith("e"):
+            return fmt_sci(float(x), int(spec[1:-1]) + 1)
         return format(float(x), spec)
     except (TypeError, ValueError):
         return str(x)

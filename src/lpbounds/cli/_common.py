@@ -22,6 +22,7 @@ from ..outputs import check_output_dir, check_output_file
 
 __all__ = [
     "LazyProgress",
+    "LogHandler",
     "add_model_argument",
     "add_verbosity_options",
     "check_output_dir",
@@ -79,10 +80,40 @@ def print_table(table: Any) -> None:
     console.print_wide(table, TABLE_MIN_WIDTH)
 
 
+#: The consoles of the progress displays being drawn now (at most one in practice): the
+#: log goes through the innermost, so that rich prints it above the live display.
+_LIVE: list[Console] = []
+
+
+class LogHandler(logging.Handler):
+    """The ``lpbounds`` log on stderr, one line per record, never inside a progress display.
+
+    While a :class:`LazyProgress` is drawing, a record is printed through the display's
+    console, which puts it above the live lines and redraws them below (written to the
+    terminal directly, the text would land inside the display, which rich then redraws
+    under it, a copy per line it wrapped to). Otherwise it is written to the *current*
+    ``sys.stderr`` (pytest's capture, a redirected stream), looked up at each record.
+    """
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = self.format(record)
+            if _LIVE:
+                from rich.text import Text
+
+                _LIVE[-1].print(Text(text))
+            else:
+                sys.stderr.write(text + "\n")
+                sys.stderr.flush()
+        except Exception:  # a broken stream must not end the command (logging's rule)
+            self.handleError(record)
+
+
 class LazyProgress:
     """A rich :class:`~rich.progress.Progress` that starts drawing at its first task, and
     only on a terminal, so a rejected command prints its one error line and nothing else
-    (and a log file gets no progress frames)."""
+    (and a log file gets no progress frames). While it draws, the log goes through its
+    console (:class:`LogHandler`): above the display, once."""
 
     def __init__(self, prog: Progress) -> None:
         self._prog = prog
@@ -93,6 +124,7 @@ class LazyProgress:
         if not self._started and console_.is_terminal and not console_.quiet:
             self._prog.start()
             self._started = True
+            _LIVE.append(console_)
         return self._prog.add_task(*args, **kwargs)
 
     def update(self, *args: Any, **kwargs: Any) -> None:
@@ -103,6 +135,9 @@ class LazyProgress:
 
     def stop(self) -> None:
         if self._started:
+            self._started = False
+            if self._prog.console in _LIVE:
+                _LIVE.remove(self._prog.console)
             self._prog.stop()
 
 
@@ -166,7 +201,7 @@ def configure_output(quiet: bool = False, verbose: bool = False) -> Iterator[Non
 
     log = logging.getLogger("lpbounds")
     saved = (log.level, log.propagate, console.quiet, err_console.quiet)
-    handler = logging.StreamHandler(sys.stderr)  # the current one (pytest's capsys)
+    handler = LogHandler()  # stderr at each record, above a live progress display
     handler.setFormatter(logging.Formatter("lpbounds: %(levelname)s: %(message)s"))
     log.addHandler(handler)
     log.setLevel(logging.DEBUG if verbose else logging.ERROR if quiet else logging.WARNING)

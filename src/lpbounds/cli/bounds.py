@@ -24,6 +24,7 @@ from rich.table import Table
 
 from ..errors import SolverError, ValidationError
 from ..outputs import run_metadata, write_text_atomic
+from ..text import fmt_bool, fmt_list, fmt_sci, fmt_seconds
 from ._common import (
     add_model_argument,
     check_output_file,
@@ -79,8 +80,8 @@ def run(args: argparse.Namespace) -> int:
     out["lp_solved"] = solve_lp
     if not solve_lp:
         out["lp_note"] = (
-            f"LP not solved (M = {params.n_partitions} > --lp-max-partitions "
-            f"{args.lp_max_partitions}, or --no-lp): the fixed points are the LPs' exact optima"
+            f"LP not solved (M = {params.n_partitions:,} > --lp-max-partitions "
+            f"{args.lp_max_partitions:,}, or --no-lp): the fixed points are the LPs' exact optima"
         )
     with progress() as prog:
         steps = 4 + (2 if solve_lp else 0)
@@ -105,8 +106,16 @@ def run(args: argparse.Namespace) -> int:
         console.print("[red]the lower bound exceeds the upper bound somewhere[/red]")
         return 1
     if bad:
-        raise SolverError(f"LP optimum differs from the fixed point for {bad}")
+        raise SolverError(f"LP optimum differs from the fixed point for {fmt_list(bad, 'and')}")
     return 0
+
+
+def _step(key: str) -> str:
+    """A step's key in words: ``ublp_fixed_point`` -> ``UBLP fixed point``."""
+    if key.startswith("lemma"):
+        return f"Lemma {key[5:]}"
+    words = key.split("_")
+    return " ".join(w.upper() if w in ("ublp", "lblp", "lp") else w for w in words)
 
 
 def _print(out: dict[str, Any], params: Any) -> None:
@@ -114,34 +123,40 @@ def _print(out: dict[str, Any], params: Any) -> None:
     t = Table(title=f"LBLP / UBLP bounds of {out['instance']}", show_header=False)
     t.add_row("|S| (eq. 27)", f"{out['n_states']:,}")
     t.add_row("M (eq. 28)", f"{out['n_partitions']:,}")
-    t.add_row("allow_empty_loiter", str(out["allow_empty_loiter"]))
+    t.add_row("allow_empty_loiter", fmt_bool(out["allow_empty_loiter"], "true", "false"))
     for name in ("UBLP", "LBLP"):
         e = out[name]
         fp = e["fixed_point"]
         t.add_row(
             f"{name} fixed point",
-            f"{e['n_rows']:,} rows, {fp['iterations']} iterations, residual "
-            f"{fp['residual']:.2e}, {fp['seconds']:.2f} s",
+            f"{e['n_rows']:,} rows, {fp['iterations']:,} iterations, residual "
+            f"{fmt_sci(fp['residual'])}, {fmt_seconds(fp['seconds'])}",
         )
         if "lp" in e:
             lp = e["lp"]
             t.add_row(
                 f"{name} LP ({lp['solver']})",
-                f"{lp['status']}, {lp['seconds']:.2f} s, max |LP - fixed point| "
-                f"{lp['max_abs_diff_fixed_point']:.2e} (tol {lp['tolerance']:.1e})",
+                f"{lp['status']}, {fmt_seconds(lp['seconds'])}, max |LP - fixed point| "
+                f"{fmt_sci(lp['max_abs_diff_fixed_point'])} (tolerance {fmt_sci(lp['tolerance'])})",
             )
     g = out["gap"]
     t.add_row(
         "gap v* - w* per partition",
-        f"min {g['min']:.3e}  mean {g['mean']:.3e}  median {g['median']:.3e}  max {g['max']:.3e}",
+        f"min {fmt_sci(g['min'], 4)}, mean {fmt_sci(g['mean'], 4)}, median "
+        f"{fmt_sci(g['median'], 4)}, max {fmt_sci(g['max'], 4)}",
     )
     lem = out["lemma3"]
+    where = (
+        f" (all at taubar = {fmt_list(lem['differing_taubar_values'], 'or')}, the Gamma cap)"
+        if lem["pairs_differing"]
+        else ""
+    )
     t.add_row(
         "Lemma 3 |T(i,u)|",
-        f"{lem['pairs_differing']} of {lem['pairs']} pairs differ from the paper's formula "
-        f"(all at taubar = {lem['differing_taubar_values']}, the Gamma cap)",
+        f"{lem['pairs_differing']:,} of {lem['pairs']:,} pairs differ from the paper's "
+        f"formula{where}",
     )
-    t.add_row("time (s)", ", ".join(f"{k} {v:.2f}" for k, v in out["seconds"].items()))
+    t.add_row("time", ", ".join(f"{_step(k)} {fmt_seconds(v)}" for k, v in out["seconds"].items()))
     t.add_row("peak memory", f"{out['peak_rss_mb']:.0f} MB")
     if "lp_note" in out:
         t.add_row("LP", out["lp_note"])
@@ -161,6 +176,6 @@ def _print(out: dict[str, Any], params: Any) -> None:
             str(k["taubar"]),
             f"{row['lower']:.6f}",
             f"{row['upper']:.6f}",
-            f"{row['gap']:.3e}",
+            fmt_sci(row["gap"], 4),
         )
     console.print(w)

@@ -18,6 +18,7 @@ from rich.text import Text
 from .._defaults import DEFAULT_FORMULATIONS, DEFAULT_INSTANCES, DEFAULT_SHIFTS
 from ..errors import ValidationError
 from ..outputs import MANIFEST, AtomicDirectory
+from ..text import fmt_list, fmt_number, fmt_sci, fmt_seconds
 from ..tolerances import LP_CERT_RTOL
 from ._common import check_output_dir, console, positive_float, print_table, progress
 
@@ -43,14 +44,25 @@ def register(sub: argparse._SubParsersAction) -> None:
         "models",
         metavar="MODEL",
         nargs="*",
-        help=f"instances (default: {' '.join(DEFAULT_INSTANCES)})",
+        help=f"instances (default: {', '.join(DEFAULT_INSTANCES)}); lpbounds models lists the "
+        "named ones",
+    )
+    p.add_argument(
+        "--instances",
+        nargs="+",
+        metavar="MODEL",
+        default=None,
+        help="the instances, as an option: names, files or garnet:N:M[:SEED], separated "
+        "by spaces or commas (forest,gridworld,queue); the same as the MODEL arguments, "
+        "give one or the other",
     )
     p.add_argument(
         "--formulations",
         nargs="+",
         metavar="NAME",
         default=list(DEFAULT_FORMULATIONS),
-        help="paper names: ELP RLP SLP IB ALP UBLP LBLP (default: %(default)s)",
+        help="paper names: ELP RLP SLP IB ALP UBLP LBLP "
+        f"(default: {', '.join(DEFAULT_FORMULATIONS)})",
     )
     p.add_argument(
         "--solvers",
@@ -60,14 +72,16 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="e.g. HIGHS (all option sets) HIGHS:ipm CLARABEL SCIPY "
         "(default: every installed LP solver)",
     )
-    p.add_argument("--repeat", type=int, default=1, metavar="K", help="solves per combination")
+    p.add_argument(
+        "--repeat", type=int, default=1, metavar="K", help="solves per combination (default 1)"
+    )
     p.add_argument(
         "--accuracy",
         type=float,
         default=LP_CERT_RTOL,
         metavar="RTOL",
         help="requested accuracy relative to max|R|/(1-lambda): ok = certified error within "
-        "it (default %(default)g)",
+        f"it (default {fmt_number(LP_CERT_RTOL)})",
     )
     p.add_argument(
         "--time-limit",
@@ -83,8 +97,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         nargs="+",
         default=list(DEFAULT_SHIFTS),
         metavar="SECONDS",
-        help="shifts of the shifted geometric means of time (default: %(default)s: "
-        "Mittelmann's 10 s, and 0.01 s for sub-second solves)",
+        help="shifts of the shifted geometric means of time (default: "
+        f"{fmt_list(DEFAULT_SHIFTS, 'and')}: Mittelmann's 10 s, and 0.01 s "
+        "for sub-second solves)",
     )
     p.add_argument(
         "--out",
@@ -118,8 +133,12 @@ def nonnegative_float(text: str) -> float:
 
 
 def _fmt(x: object, spec: str) -> str:
+    """A table cell: ``-`` for none or a non-finite number; an ``.Ne`` spec as
+    :func:`~lpbounds.text.fmt_sci` writes it (``5.7e-11``, ``0``; not ``0.0e+00``)."""
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "-"
+    if spec.endswith("e"):
+        return fmt_sci(x, int(spec[1:-1]) + 1)
     return format(x, spec)
 
 
@@ -227,9 +246,28 @@ COMPARE_FILES: tuple[str, ...] = (
 )
 
 
+def instance_list(given: list[str] | None) -> list[str]:
+    """The instances of ``--instances`` or the MODEL arguments: each item split at commas
+    (``forest,gridworld queue`` is three); an empty item (``forest,,queue``) is refused."""
+    out: list[str] = []
+    for item in given or []:
+        parts = [p.strip() for p in item.split(",")]
+        if not all(parts):
+            raise ValidationError(
+                f"an empty instance name in {item!r} (instances are separated by commas)"
+            )
+        out += parts
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     from ..studies.compare import run_study, save_study
 
+    if args.models and args.instances:
+        raise ValidationError(
+            "instances given twice: as MODEL arguments and with --instances; give one or the other"
+        )
+    instances = instance_list(args.instances or args.models) or None
     check_output_dir(args.out, "--out", replaceable=COMPARE_FILES)
     with progress() as prog:
         task = prog.add_task("comparing solvers", total=None, status="")
@@ -238,7 +276,7 @@ def run(args: argparse.Namespace) -> int:
             prog.update(task, total=total, completed=done, status=f"{done}/{total}")
 
         result = run_study(
-            args.models or None,
+            instances,
             args.formulations,
             args.solvers,
             repeat=args.repeat,
@@ -252,7 +290,10 @@ def run(args: argparse.Namespace) -> int:
         raise ValidationError("nothing was solved: " + ("; ".join(result.notes) or "no task"))
     summary = result.summary()
     console.print(
-        Text(f"lpbounds compare: {len(result.frame)} solves in {result.seconds:.1f} s", "bold")
+        Text(
+            f"lpbounds compare: {len(result.frame):,} solves in {fmt_seconds(result.seconds)}",
+            "bold",
+        )
     )
     for instance, rows in summary.groupby("instance", sort=False):
         table, footnotes = _instance_table(str(instance), rows)
@@ -261,13 +302,17 @@ def run(args: argparse.Namespace) -> int:
             console.print(Text(line))
     console.print(
         "cert.err = certified bound on max |LP values - exact optimum| from the returned "
-        f"point alone; ok = status optimal and cert.err <= {args.accuracy:g} * "
+        f"point alone; ok = status optimal and cert.err <= {fmt_number(args.accuracy)} * "
         "max|R|/(1-lambda); max dev = max |LP values - exact fixed point| (exact DP); "
         "resid = primal residual; comp s = cvxpy's compile time"
     )
     shifts = list(dict.fromkeys(args.shift))
     print_table(_solver_table(result.solver_summary(shifts), shifts))
-    charged = f"the time limit ({args.time_limit:g} s)" if args.time_limit else "the longest solve"
+    charged = (
+        f"the time limit ({fmt_seconds(args.time_limit)})"
+        if args.time_limit
+        else "the longest solve"
+    )
     console.print(
         "counts are solves: opt(imal), inacc(urate), t.lim (time limit), lim (other limits), "
         f"fail (no point); sgm = shifted geometric mean of solve time in s, an unsolved "
@@ -275,10 +320,11 @@ def run(args: argparse.Namespace) -> int:
     )
     for note in result.notes:
         log.warning("note: %s", note)
-    if result.not_installed:
-        console.print(
-            f"{len(result.not_installed)} other known LP solvers are not installed here "
-            "(names and install commands in notes.txt)"
+    if result.not_installed:  # optional: said with --verbose only (their list is in notes.txt)
+        log.info(
+            "not installed here, so not compared (optional LP solvers; install commands in "
+            "notes.txt): %s",
+            fmt_list(result.not_installed, "and"),
         )
     target = AtomicDirectory(args.out, replaceable=COMPARE_FILES)
     with target as tmp:
@@ -289,5 +335,6 @@ def run(args: argparse.Namespace) -> int:
             command_line=["lpbounds", *getattr(args, "argv", sys.argv[1:])],
         )
         out = target.commit({"instances": sorted(set(summary["instance"].astype(str)))})
-    console.print(f"wrote {out}: " + ", ".join(p.name for p in paths.values()) + ", manifest.json")
+    names = [p.name for p in paths.values()] + [MANIFEST]
+    console.print(f"wrote {out}: {fmt_list(names, 'and')}")
     return 0

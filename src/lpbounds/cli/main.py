@@ -20,7 +20,16 @@ from ..outputs import committed_outputs
 from ._common import add_verbosity_options, configure_output
 
 #: Subcommand modules, in the order ``lpbounds --help`` lists them.
-COMMANDS: tuple[str, ...] = ("solve", "verify", "bounds", "reproduce", "compare", "export", "score")
+COMMANDS: tuple[str, ...] = (
+    "solve",
+    "verify",
+    "bounds",
+    "reproduce",
+    "compare",
+    "export",
+    "score",
+    "models",
+)
 
 EXIT_OK = 0
 #: A computation failed: a solver error, no convergence, two results that disagree.

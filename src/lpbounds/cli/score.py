@@ -11,8 +11,19 @@ from typing import Any
 from rich.table import Table
 from rich.text import Text
 
+from ..text import fmt_number, fmt_sci, fmt_within
 from ..tolerances import LP_CERT_RTOL
 from ._common import check_output_file, positive_float, print_table
+
+#: The example of ``--help``: solved with highspy, which lpbounds installs (HiGHS' Python
+#: package; no ``highs`` program comes with it), then scored.
+EPILOG = (
+    "example (HiGHS through highspy, installed with lpbounds; any LP solver's vector works):\n"
+    "  lpbounds export garnet-small --formulation RLP --out lib/rlp\n"
+    "  python -c \"import highspy; h = highspy.Highs(); h.readModel('lib/rlp/lp.mps'); "
+    "h.run(); h.writeSolution('sol.txt', 0)\"\n"
+    "  lpbounds score lib/rlp sol.txt\n"
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -21,15 +32,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="score a solution file against an lpbounds export (objective error, deviation, "
         "infeasibility, certified error)",
         description=(
-            "Read SOLUTION (HiGHS' raw or sparse solution file, as highs --solution_file\n"
-            "writes it; a .npy vector; or a text vector of one number per column) and\n"
-            "measure it against the export DIR: objective error, max deviation from the\n"
-            "exact optimum, primal infeasibility max (b - A x)+, and the certified error of\n"
-            "the point (from the point alone, on the export's Bellman rows). Exit status 0\n"
-            "whatever the score; 2 for a malformed or mismatched solution file."
+            "Read SOLUTION (a HiGHS solution file in its raw or sparse style, as highspy's\n"
+            "Highs.writeSolution writes it; a .npy vector; or a text vector of one number per\n"
+            "column) and measure it against the export DIR: objective error, max deviation\n"
+            "from the exact optimum, primal infeasibility max (b - A x)+, and the certified\n"
+            "error of the point (from the point alone, on the export's Bellman rows). Exit\n"
+            "status 0 whatever the score; 2 for a malformed or mismatched solution file."
         ),
-        epilog="example:\n  lpbounds export garnet-small --formulation RLP --out lib/rlp\n"
-        "  highs lib/rlp/lp.mps --solution_file sol.txt\n  lpbounds score lib/rlp sol.txt",
+        epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("export_dir", metavar="DIR", help="a folder written by lpbounds export")
@@ -40,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=LP_CERT_RTOL,
         metavar="RTOL",
         help="status optimal when the certified error is within RTOL * max|R|/(1-lambda) "
-        "(default %(default)g)",
+        f"(default {fmt_number(LP_CERT_RTOL)})",
     )
     p.add_argument("--json", metavar="PATH", help="also write the score as JSON")
     p.set_defaults(func=run)
@@ -60,21 +70,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _num(x: Any, spec: str = ".3e") -> str:
+def _num(x: Any, digits: int = 4) -> str:
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
         return "-"
-    return format(x, spec)
+    return fmt_sci(x, digits)
 
 
 def _table(s: Any) -> Table:
     t = Table(title=Text(f"score of {s.solution}"), show_header=False)
-    status = f", solver's model status {s.model_status!r}" if s.model_status else ""
+    status = f", the solver's model status: {s.model_status}" if s.model_status else ""
     t.add_row("solution", Text(f"{s.format}, {s.columns:,} columns{status}"))
-    t.add_row("objective c'x", _num(s.objective, ".15g"))
+    t.add_row("objective c'x", "-" if s.objective is None else f"{s.objective:.15g}")
     if s.optimum_objective is not None:
         lo, hi = s.objective_bracket
         t.add_row(
-            "exact optimum", f"{s.optimum_objective:.15g} (certified in [{lo:.15g}, {hi:.15g}])"
+            "exact optimum",
+            f"{s.optimum_objective:.15g} (certified {fmt_within(lo, hi)})",
         )
         t.add_row("objective error", f"|c'x - c'x*| = {_num(s.objective_error)}")
         t.add_row(
@@ -94,6 +105,7 @@ def _table(s: Any) -> Table:
     )
     within = "within" if s.status.value == "optimal" else "above"
     t.add_row(
-        "status", f"{s.status.value}: certified error {within} {s.accuracy:g} * max|R|/(1-lambda)"
+        "status",
+        f"{s.status.value}: certified error {within} {fmt_number(s.accuracy)} * max|R|/(1-lambda)",
     )
     return t

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
 from pathlib import Path
 from typing import Any
@@ -27,6 +26,8 @@ from typing import Any
 from rich.table import Table
 
 from ..outputs import AtomicDirectory, run_metadata, write_text_atomic
+from ..text import fmt_counts, fmt_list, fmt_number, fmt_sci, fmt_seconds
+from ..tolerances import DP_RTOL
 from ._common import (
     add_model_argument,
     check_output_dir,
@@ -41,9 +42,21 @@ from ._common import (
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("solve", help="solve an instance exactly (VI / PI / MPI)")
     add_model_argument(p)
-    p.add_argument("--method", choices=("mpi", "vi", "pi", "ipi"), default="mpi")
-    p.add_argument("--tol", type=positive_float, default=None, help="residual tolerance (absolute)")
-    p.add_argument("--max-iter", type=positive_int, default=100_000)
+    p.add_argument(
+        "--method",
+        choices=tuple(METHOD_NAMES),
+        default="mpi",
+        help=f"{fmt_list(METHOD_NAMES.values(), 'or')} (default: mpi)",
+    )
+    p.add_argument(
+        "--tol",
+        type=positive_float,
+        default=None,
+        help=f"residual tolerance ||TV - V||, absolute (default {fmt_number(DP_RTOL)} * max|R|)",
+    )
+    p.add_argument(
+        "--max-iter", type=positive_int, default=100_000, help="iteration limit (default 100,000)"
+    )
     p.add_argument("--json", metavar="PATH", help="also write the statistics as JSON")
     p.add_argument(
         "--out",
@@ -59,8 +72,6 @@ SOLUTION_FILES: tuple[str, ...] = ("solution.npz", "solution.json", "manifest.js
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
     from ..dp import solve_exact
     from ..model.instances import load_instance
 
@@ -99,25 +110,58 @@ def run(args: argparse.Namespace) -> int:
         "value_mean": float(v.mean()),
         "value_max": float(v.max()),
     }
-    table = Table(title=f"exact solve of {inst.name}", show_header=False)
-    for k, val in stats.items():
-        if isinstance(val, float):
-            text = f"{val:.6g}" if math.isfinite(val) else str(val)
-        else:
-            text = str(val)
-        table.add_row(k, text)
-    action_counts = np.bincount(result.policy, minlength=mdp.n_actions)
-    table.add_row(
-        "policy (states per action)",
-        ", ".join(f"{mdp.action_names[a]}: {c}" for a, c in enumerate(action_counts)),
-    )
-    console.print(table)
+    console.print(_table(stats, mdp, result))
     if args.json:
         write_text_atomic(args.json, json.dumps({**stats, "environment": run_metadata()}, indent=2))
     if args.out:
         out = write_solution(args.out, mdp, result, stats)
-        console.print(f"wrote {out}: " + ", ".join(SOLUTION_FILES))
+        console.print(f"wrote {out}: {fmt_list(SOLUTION_FILES, 'and')}")
     return 0
+
+
+#: The methods by name, as the table says them.
+METHOD_NAMES = {
+    "mpi": "modified policy iteration (mpi)",
+    "vi": "value iteration (vi)",
+    "pi": "policy iteration (pi)",
+    "ipi": "inexact policy iteration (ipi)",
+}
+
+
+def _table(stats: dict[str, Any], mdp: Any, result: Any) -> Table:
+    """The statistics as a person reads them (``--json`` keeps the machine's names)."""
+    import numpy as np
+
+    t = Table(title=f"exact solve of {stats['instance']}", show_header=False)
+    t.add_row(
+        "model",
+        f"{fmt_number(stats['n_states'])} states, {fmt_number(stats['n_actions'])} actions, "
+        f"{fmt_number(stats['n_outcomes'])} outcomes, discount {fmt_number(stats['discount'])}",
+    )
+    t.add_row("method", METHOD_NAMES.get(stats["method"], stats["method"]))
+    t.add_row(
+        "iterations", f"{fmt_number(stats['iterations'])} ({fmt_number(stats['sweeps'])} sweeps)"
+    )
+    t.add_row(
+        "Bellman residual",
+        f"||TV - V|| = {fmt_sci(stats['residual'])} (tolerance {fmt_sci(stats['tol'])})",
+    )
+    t.add_row("error bound", f"||V - V*|| <= {fmt_sci(stats['error_bound'])}")
+    t.add_row(
+        "V*",
+        f"min {fmt_number(stats['value_min'])}, mean {fmt_number(stats['value_mean'])}, "
+        f"max {fmt_number(stats['value_max'])}",
+    )
+    counts = np.bincount(result.policy, minlength=mdp.n_actions)
+    t.add_row(
+        "policy (states per action)",
+        fmt_counts({mdp.action_names[a]: int(c) for a, c in enumerate(counts)}),
+    )
+    t.add_row(
+        "time",
+        f"build {fmt_seconds(stats['build_seconds'])}, solve {fmt_seconds(stats['solve_seconds'])}",
+    )
+    return t
 
 
 def write_solution(out: str, mdp: Any, result: Any, stats: dict[str, Any]) -> Path:

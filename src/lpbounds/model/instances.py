@@ -38,6 +38,18 @@ from ..errors import ValidationError
 from ..validation import check_bool, check_int, check_real
 from .mdp import FiniteMDP
 from .partition import Partition
+from .shelf import (
+    SHELF_KINDS,
+    admission_queue,
+    cliff_walking,
+    forest,
+    frozen_lake,
+    gridworld,
+    gymnasium_model,
+    inventory,
+    savings,
+    taxi,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -48,21 +60,36 @@ __all__ = [
     "MODEL_KINDS",
     "PARTITION_KINDS",
     "Instance",
+    "admission_queue",
+    "cliff_walking",
+    "forest",
+    "frozen_lake",
+    "gridworld",
+    "gymnasium_model",
+    "inventory",
     "load_instance",
     "models_dir",
     "packaged_models_dir",
     "resolve_instance_path",
+    "savings",
+    "taxi",
 ]
 
 #: kind -> "module:function(config: dict) -> FiniteMDP"
 MODEL_KINDS: dict[str, str] = {
     "garnet": "lpbounds.model.instances:_build_garnet",
     "patrol": "lpbounds.patrol.instance:build_mdp",
+    "explicit": "lpbounds.model.instances:_build_explicit",
+    # the shelf of known models (lpbounds.model.shelf: forest, gridworld, ...)
+    **{kind: "lpbounds.model.shelf:build_model" for kind in SHELF_KINDS},
 }
 #: kind -> "module:function(config: dict, instance: Instance) -> Partition"
 PARTITION_KINDS: dict[str, str] = {
     "random": "lpbounds.model.instances:_build_random_partition",
     "patrol": "lpbounds.patrol.instance:build_partition",
+    "labels": "lpbounds.model.instances:_build_labels_partition",
+    "blocks": "lpbounds.model.shelf:build_blocks",  # consecutive states (the shelf's files)
+    "grid": "lpbounds.model.shelf:build_grid",  # tiles of a grid of states
 }
 
 
@@ -115,7 +142,7 @@ def resolve_instance_path(source: str | Path) -> Path:
     known = sorted(p.stem for p in packaged_models_dir().glob("*.toml"))
     raise ValidationError(
         f"no instance file {str(source)!r}, and no packaged model of that name; "
-        f"packaged models: {known}"
+        f"packaged models: {', '.join(known)}"
     )
 
 
@@ -308,3 +335,41 @@ def _build_random_partition(table: Mapping[str, Any], instance: Instance) -> Par
     n_partitions = check_int("[partition] n_partitions", c["n_partitions"], lo=1)
     seed = check_int("[partition] seed", c["seed"], lo=0)
     return random_partition(instance.mdp().n_states, n_partitions, seed)
+
+
+# ---------------------------------------------------------------------- explicit arrays
+#: ``kind = "explicit"``: a small MDP written out in full, as :class:`FiniteMDP` takes it
+#: (``successors[x][u][l]``, ``probabilities[l]`` or ``[x][u][l]``, ``rewards[x][u]``,
+#: ``allowed[x][u]`` optional); shrunk counterexamples are written so
+#: (:mod:`lpbounds.studies.shrink`). Validated by :class:`FiniteMDP`, which names the entry.
+_EXPLICIT_KEYS = {
+    "successors": ...,
+    "probabilities": ...,
+    "rewards": ...,
+    "discount": ...,
+    "allowed": None,
+}
+
+
+def _build_explicit(table: Mapping[str, Any]) -> FiniteMDP:
+    c = check_keys(table, _EXPLICIT_KEYS, "model")
+    discount = check_real("[model] discount", c["discount"], lo=0.0, hi=1.0, hi_open=True)
+    try:
+        return FiniteMDP(c["successors"], c["probabilities"], c["rewards"], discount, c["allowed"])
+    except ValidationError as exc:
+        raise ValidationError(f"[model] {exc}") from None
+
+
+def _build_labels_partition(table: Mapping[str, Any], instance: Instance) -> Partition:
+    """``kind = "labels"``: ``labels[x]``, the block of state ``x`` (0-based)."""
+    c = check_keys(table, {"labels": ...}, "partition")
+    n = instance.mdp().n_states
+    try:
+        part = Partition(c["labels"])
+    except ValidationError as exc:
+        raise ValidationError(f"[partition] {exc}") from None
+    if part.n_states != n:
+        raise ValidationError(
+            f"[partition] labels has {part.n_states} entries; the model has {n} states"
+        )
+    return part

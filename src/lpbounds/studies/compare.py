@@ -52,12 +52,13 @@ solves run on the same cores are noisy: use ``jobs=1`` for timings you want to q
 
 from __future__ import annotations
 
+import logging
 import math
 import multiprocessing
 import os
 import time
 import warnings
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -77,6 +78,7 @@ from ..formulations.solvers import (
     with_time_limit,
 )
 from ..status import POINT_STATUSES, Status
+from ..text import fmt_list, fmt_seconds
 from ..tolerances import LP_CERT_RTOL, LP_COMPARE_RTOL, dp_scale
 from .report import (
     DEFAULT_SHIFTS,
@@ -101,6 +103,7 @@ __all__ = [
     "StudyResult",
     "Task",
     "available_formulations",
+    "dask_map",
     "highs_algorithms",
     "missing_solvers",
     "plot_study",
@@ -192,20 +195,22 @@ def missing_solvers(installed: Sequence[str]) -> list[str]:
     ]
 
 
-
 def _expand(spec: str, solver: str, opt: str, notes: list[str]) -> dict[str, dict[str, Any]]:
     """The option sets ``spec`` names (all when ``opt`` is empty); skips noted, typos raised."""
     sets = option_sets(solver)
     known = known_option_sets(solver)
     unsupported = sorted(set(known) - set(sets))
     if unsupported and not opt:
-        notes.append(f"{solver}: this installation does not accept {unsupported}; skipped")
+        notes.append(
+            f"{solver}: this installation does not accept {fmt_list(unsupported)}; skipped"
+        )
     if not opt:
         return sets
     if opt not in sets:
         if opt not in known:
             raise ValidationError(
-                f"solver {spec!r}: unknown option set {opt!r}; {solver} has {known}"
+                f"solver {spec!r}: unknown option set {opt!r}; {solver} has "
+                f"{fmt_list(known, 'and')}"
             )
         notes.append(f"{spec}: skipped: this {solver} does not accept {opt!r}")
         return {}
@@ -500,7 +505,9 @@ def available_formulations(
     for name in requested:
         spec = FORMULATIONS.get(name)
         if spec is None:
-            raise ValidationError(f"unknown formulation {name!r}; known: {sorted(FORMULATIONS)}")
+            raise ValidationError(
+                f"unknown formulation {name!r}; known: {fmt_list(FORMULATIONS, 'and')}"
+            )
         try:
             importlib.import_module(spec.module)
         except ImportError as exc:
@@ -693,7 +700,7 @@ def run_task(task: Task) -> list[dict[str, Any]]:
 
 
 # ---------------------------------------------------------------------- the study
-@dataclass
+@dataclass(repr=False)
 class StudyResult:
     """A study's table (one row per solve), the notes on what was skipped, and how it was
     run (``params``: instances, formulations, configurations, accuracy, time limit)."""
@@ -706,6 +713,66 @@ class StudyResult:
     #: installed here, which it could not run (:func:`missing_solvers`; written to notes.txt
     #: with their install commands)
     not_installed: list[str] = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        """One line, no table: solves, instances, formulations, configurations, seconds."""
+        f = self.frame
+        counts = [
+            f"{len(f):,} solves",
+            f"{len(self.params.get('instances', [])):,} instances",
+            f"formulations {fmt_list(self.params.get('formulations', []))}",
+            f"{len(self.params.get('configs', [])):,} solver configurations",
+        ]
+        return f"StudyResult({', '.join(counts)}, {fmt_seconds(self.seconds)})"
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The study as a table, one row per solve (a copy: changing it changes nothing
+        here).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Indexed by ``solve`` (0, 1, ...), with the columns :data:`COLUMNS`:
+
+            ``instance``, ``n_states``, ``n_partitions``
+                The instance's name (a models/ name or ``garnet:N:M[:SEED]``) and its size
+                (``n_partitions`` None without a partition).
+            ``formulation``, ``n_rows``, ``n_vars``
+                The paper's name and the LP's size ``A`` (rows x variables).
+            ``solver``, ``option_set``, ``config``, ``backend``, ``repeat``
+                cvxpy's solver name, the named option set, ``SOLVER`` or ``SOLVER:SET``,
+                the code that runs (``SCIPY`` runs HiGHS), the repetition (0, 1, ...).
+            ``status``
+                The :class:`~lpbounds.status.Status` value (``optimal``, ``inaccurate``,
+                ``time_limit``, ``infeasible``, ``solver_error``, ...), decided from the
+                returned point's certificate.
+            ``objective``
+                ``c'x`` of the returned point.
+            ``certified_error``, ``rel_error``
+                A bound on ``max |values - exact optimum|`` certified from the point alone
+                (``inf`` without a point), and the same relative to ``max|R| / (1 -
+                lambda)``.
+            ``accuracy``, ``time_limit``, ``accurate``
+                The requested relative accuracy, the seconds given to the solver (None
+                without a limit, or for a solver that has no time-limit option), and
+                whether the point is certified within ``accuracy`` (the solve counts as
+                solved).
+            ``max_deviation``, ``deviation_tol``, ``reference_error_bound``
+                ``max |values - exact|`` against the formulation's exact, solver-free
+                counterpart (NaN without a point), the tolerance it is read against, and
+                the exact reference's own error bound.
+            ``primal_residual``, ``residual_tol``, ``dual_residual``, ``gap``
+                The LP result's ``max (b - A x)^+``, the absolute threshold of its status,
+                ``||A'y - c||_inf`` and the duality gap ``|c'x - b'y|``.
+            ``compile_seconds``, ``solve_seconds``, ``wall_seconds``
+                cvxpy's compilation, the solver's own time, and building plus solving.
+            ``iterations``, ``note``
+                The solver's iterations; the solver's message, warnings, and why an
+                "infeasible" or a time limit happened (``""`` when nothing is to say).
+        """
+        out = self.frame.copy()
+        out.index = out.index.rename("solve")
+        return out
 
     def summary(self) -> pd.DataFrame:
         """Median over repetitions per (instance, formulation, solver configuration)."""
@@ -834,7 +901,9 @@ def _prepare_tasks(
     if time_limit is not None:
         unlimited = sorted({c.solver for c in configs if not with_time_limit(c.solver, {}, 1.0)[1]})
         if unlimited:
-            notes.append(f"no time-limit option known for {unlimited}: they run without one")
+            notes.append(
+                f"no time-limit option known for {fmt_list(unlimited, 'and')}: they run without one"
+            )
     tasks = [
         Task(s, f, c, repeat, float(accuracy), time_limit)
         for s in instances
@@ -844,7 +913,78 @@ def _prepare_tasks(
     return tasks, notes
 
 
-def _run_dask(tasks: list[Task], scheduler: str | Any) -> Iterable[list[dict[str, Any]]]:
+#: A log record of a worker process, re-emitted by the parent: (logger name, level, text).
+LogLine = tuple[str, int, str]
+
+
+class _Collect(logging.Handler):
+    """Keeps the records of the ``lpbounds`` log (WARNING and above) instead of printing."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.lines: list[LogLine] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.lines.append((record.name, record.levelno, record.getMessage()))
+
+
+def run_task_in_worker(task: Task) -> tuple[list[dict[str, Any]], list[LogLine]]:
+    """:func:`run_task` in a worker process, returning its ``lpbounds`` log records (WARNING
+    and above) instead of printing them: a worker writing to the terminal itself would
+    write into the parent's progress display, and every worker would repeat a notice (the
+    numba compile notice, once per worker). The parent logs each distinct record once."""
+    logger = logging.getLogger("lpbounds")
+    handler = _Collect()
+    saved = logger.propagate
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        return run_task(task), handler.lines
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = saved
+
+
+def _relog(lines: Iterable[LogLine], seen: set[LogLine]) -> None:
+    """Log the workers' records in this process, each distinct one once."""
+    for line in lines:
+        if line not in seen:
+            seen.add(line)
+            name, level, text = line
+            logging.getLogger(name).log(level, "%s", text)
+
+
+def dask_map(
+    fn: Callable[[Any], Any], items: Sequence[Any], scheduler: str | Any
+) -> Iterator[tuple[int, Any]]:
+    """``fn`` over ``items`` through Dask: ``(index, fn(items[index]))`` as each finishes.
+
+    Parameters
+    ----------
+    fn : callable
+        Picklable (a module-level function) for a cluster or the ``processes`` scheduler.
+    items : sequence
+    scheduler : str or dask.distributed.Client
+        One of :data:`DASK_LOCAL` (Dask's local schedulers: the calls are computed
+        together and yielded in order), the address of a running Dask scheduler, or a
+        client (the calls are submitted at once and yielded as they complete; a client
+        given is left open, one made from an address is closed).
+
+    Raises
+    ------
+    SolverNotInstalledError
+        Without dask (a local scheduler) or dask.distributed (a cluster).
+    """
+    if scheduler in DASK_LOCAL:
+        try:
+            import dask
+        except ImportError as exc:
+            raise SolverNotInstalledError(
+                f"scheduler {scheduler!r} needs dask: pip install 'lpbounds[study]'"
+            ) from exc
+        calls = [dask.delayed(fn, pure=False)(t) for t in items]
+        yield from enumerate(dask.compute(*calls, scheduler=str(scheduler)))
+        return
     try:
         from dask.distributed import Client, as_completed
     except ImportError as exc:
@@ -854,12 +994,19 @@ def _run_dask(tasks: list[Task], scheduler: str | Any) -> Iterable[list[dict[str
     own = not isinstance(scheduler, Client)
     client = Client(scheduler) if own else cast(Client, scheduler)
     try:
-        futures = client.map(run_task, tasks, pure=False)
+        futures = client.map(fn, list(items), pure=False)
+        where = {fut.key: k for k, fut in enumerate(futures)}
         for fut in as_completed(futures):
-            yield fut.result()
+            yield where[fut.key], fut.result()
     finally:
         if own:
             client.close()
+
+
+def _run_dask(
+    tasks: list[Task], scheduler: str | Any
+) -> Iterable[tuple[list[dict[str, Any]], list[LogLine]]]:
+    return (batch for _, batch in dask_map(run_task_in_worker, tasks, scheduler))
 
 
 #: Dask's local schedulers, usable without a cluster (``scheduler="threads"``).
@@ -872,39 +1019,43 @@ def _execute(
     scheduler: str | Any | None,
     progress: Callable[[int, int], None] | None,
 ) -> list[dict[str, Any]]:
-    """Run the tasks through Dask, in this process, or in spawned local processes."""
+    """Run the tasks through Dask, in this process, or in spawned local processes; the
+    log records of other processes are logged here, each distinct one once."""
     records: list[dict[str, Any]] = []
+    seen: set[LogLine] = set()
     if scheduler in DASK_LOCAL:
-        batches: Iterable[list[dict[str, Any]]] = _run_dask_local(tasks, str(scheduler))
+        batches: Iterable[tuple[list[dict[str, Any]], list[LogLine]]] = _run_dask_local(
+            tasks, str(scheduler)
+        )
     elif scheduler is not None:
         batches = _run_dask(tasks, scheduler)
     elif (jobs or os.cpu_count() or 1) <= 1 or len(tasks) <= 1:
-        batches = map(run_task, tasks)
+        batches = ((run_task(t), []) for t in tasks)  # this process: logged as it happens
     else:
         n = min(int(jobs or os.cpu_count() or 1), len(tasks))
         # spawn, not fork: forking a process that has run OpenMP code (numba, HiGHS)
         # aborts the child ("fork() called from a process already using GNU OpenMP")
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-            for done, batch in enumerate(pool.map(run_task, tasks), 1):
+            for done, (batch, lines) in enumerate(pool.map(run_task_in_worker, tasks), 1):
+                _relog(lines, seen)
                 records += batch
                 if progress:
                     progress(done, len(tasks))
         return records
-    for done, batch in enumerate(batches, 1):
+    for done, (batch, lines) in enumerate(batches, 1):
+        _relog(lines, seen)
         records += batch
         if progress:
             progress(done, len(tasks))
     return records
 
 
-def _run_dask_local(tasks: list[Task], scheduler: str) -> list[list[dict[str, Any]]]:
-    """The tasks as dask.delayed calls, computed by one of Dask's local schedulers."""
-    try:
-        import dask
-    except ImportError as exc:
-        raise SolverNotInstalledError(
-            f"scheduler {scheduler!r} needs dask: pip install 'lpbounds[study]'"
-        ) from exc
-    calls = [dask.delayed(run_task, pure=False)(t) for t in tasks]
-    return list(dask.compute(*calls, scheduler=scheduler))
+def _run_dask_local(
+    tasks: list[Task], scheduler: str
+) -> list[tuple[list[dict[str, Any]], list[LogLine]]]:
+    """The tasks as dask.delayed calls, computed by one of Dask's local schedulers (the
+    ``processes`` one collects each worker's log; the others run here and log here)."""
+    if scheduler == "processes":
+        return [batch for _, batch in dask_map(run_task_in_worker, tasks, scheduler)]
+    return [(batch, []) for _, batch in dask_map(run_task, tasks, scheduler)]

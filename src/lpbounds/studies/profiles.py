@@ -40,8 +40,10 @@ from ..errors import ValidationError
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
+    from matplotlib.figure import Figure
 
 __all__ = [
+    "new_figure",
     "performance_profile",
     "performance_ratios",
     "plot_performance_profile",
@@ -192,17 +194,13 @@ def plot_performance_profile(
     nothing lies on zero (drawn, not dropped). ``labels`` maps column names to legend
     text (for example with the backend).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     prof = performance_profile(table)
     ratios = performance_ratios(table).to_numpy()
     finite = ratios[np.isfinite(ratios)]
     top = max(2.0, float(finite.max()) * 2.0 if finite.size else 2.0)
     taus = np.concatenate([prof.index.to_numpy(), [top]])
-    fig, ax = plt.subplots(figsize=(9.5, 4.5))
+    fig = new_figure((9.5, 4.5))
+    ax = fig.subplots()
     styles = ["-", "--", "-.", ":"]
     for k, col in enumerate(prof.columns):
         y = np.concatenate([prof[col].to_numpy(), [prof[col].to_numpy()[-1]]])
@@ -228,5 +226,28 @@ def plot_performance_profile(
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=100)
-    plt.close(fig)
     return path
+
+
+def new_figure(size: tuple[float, float]) -> Figure:
+    """A matplotlib figure drawn by the Agg canvas, outside pyplot: no backend is selected
+    and no pyplot state is touched, so a notebook's or a script's backend stays as it was
+    (and the figure needs no ``plt.close``: it is freed with its last reference).
+
+    Parameters
+    ----------
+    size : (float, float)
+        Width and height in inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        With a :class:`~matplotlib.backends.backend_agg.FigureCanvasAgg`; ``savefig``
+        writes PNG files.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size)
+    FigureCanvasAgg(fig)
+    return fig

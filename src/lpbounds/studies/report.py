@@ -34,7 +34,7 @@ import numpy as np
 
 from .._defaults import DEFAULT_SHIFTS
 from ..status import POINT_STATUSES, Status
-from .profiles import plot_performance_profile, shifted_geometric_mean
+from .profiles import new_figure, plot_performance_profile, shifted_geometric_mean
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -232,19 +232,18 @@ def plot_study(frame: pd.DataFrame, path: str | Path) -> Path:
 
     Solves that returned no point are drawn at their wall time as red crosses (left) and
     on the top edge (right), not dropped."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib import colormaps
     from matplotlib.lines import Line2D
 
     path = Path(path)
     point = frame["status"].isin(_POINT) & np.isfinite(frame["certified_error"].astype(float))
     ok, failed = frame[point], frame[~point]
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig = new_figure((12, 4.8))
+    ax1, ax2 = fig.subplots(1, 2)
     markers = dict(zip(sorted(frame["formulation"].unique()), "osD^v<>ph*", strict=False))
     configs = list(dict.fromkeys(frame["config"]))
-    colors = {c: plt.cm.tab10(i % 10) for i, c in enumerate(configs)}
+    tab10 = colormaps["tab10"]
+    colors = {c: tab10(i % 10) for i, c in enumerate(configs)}
     for (cfg, form), grp in ok.groupby(["config", "formulation"]):
         med = grp.groupby("n_vars", as_index=False)["solve_seconds"].median()
         ax1.plot(med["n_vars"], med["solve_seconds"], marker=markers[form], color=colors[cfg])
@@ -268,7 +267,6 @@ def plot_study(frame: pd.DataFrame, path: str | Path) -> Path:
                title="solver (colour) / formulation (marker)", title_fontsize=8)  # fmt: skip
     fig.tight_layout(rect=(0, 0, 0.8, 1))
     fig.savefig(path, dpi=100)
-    plt.close(fig)
     return path
 
 

@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ...certification.certificate import Certificate
 from ...results import Result
 from ...status import Status
+from ...text import fmt_bracket, fmt_number, fmt_sci, fmt_seconds
 from .stop import StopReason
+
+if TYPE_CHECKING:  # annotations only
+    import pandas as pd
 
 __all__ = ["NLPIteration", "NLPResult"]
 
@@ -154,17 +158,103 @@ class NLPResult(Result):
         return self.method
 
     def summary_items(self) -> list[tuple[str, str]]:
-        """The bracket on ``c'w*``, why the method stopped (never called a convergence:
-        the status above says whether the bracket is certified), its counts and time."""
-        return [
-            (
-                "c'w*",
-                f"in [{self.lower_bound:.10g}, {self.upper_bound:.10g}], width "
-                f"{self.width:.3e} (relative {self.relative_gap:.3e}, asked {self.gap_rtol:.1e})",
-            ),
-            (
-                "method stopped",
-                f"{self.stop_reason} after {self.iterations} iterations, {self.cuts} cuts, "
-                f"{self.seconds:.3f} s ({self.solver})",
-            ),
-        ]
+        """The bracket on ``c'w*`` (rounded outward as printed), why the method stopped
+        (in words, with the status: a limit is never called a convergence) and its counts,
+        in the units of :meth:`log_table` (rounds, strategies, sweeps) and agreeing with
+        it (the cuts are the sum of its ``cuts_added`` column)."""
+        items = [
+            ("c'w*", self._bracket_text()),
+            ("method stopped", f"{self.stop_reason}: {self._stop_text()}"),
+            ("work", f"{self._unit(self.iterations)} in {fmt_seconds(self.seconds)}; "
+             f"solver: {self.solver}"),
+        ]  # fmt: skip
+        if self.method == "cutting-planes":
+            items.append(("cuts", self._cuts_text()))
+        return items
+
+    def log_table(self) -> pd.DataFrame:
+        """The iteration log as a table, one row per entry of :attr:`log`.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Indexed by ``iteration`` (1, 2, ...: rounds of the cutting planes, strategies
+            of strategy iteration, the one MILP solve; 0, 1, ...: sweeps of the fixed
+            point, row 0 its starting point), the last index equal to :attr:`iterations`
+            as the summary counts them, with
+            columns ``lower``, ``upper`` and ``gap`` (the method's own bracket on ``c'w*``
+            then: the cutting planes' lower side is the master's bound, not
+            rounding-certified; NaN where a method has no such side), ``cuts_added`` (the
+            lift-and-project cuts added in the round, or the monotone cuts of the round's
+            master, which replace the previous round's), ``seconds`` (since the start),
+            ``max_violation`` and ``master_objective`` (cutting planes; NaN otherwise).
+        """
+        import pandas as pd  # only where it is used
+
+        cols = [
+            "lower", "upper", "gap", "cuts_added", "seconds", "max_violation",
+            "master_objective",
+        ]  # fmt: skip
+        rows = [[getattr(e, c) for c in cols] for e in self.log]
+        index = pd.Index([e.iteration for e in self.log], name="iteration")
+        return pd.DataFrame(rows, columns=cols, index=index)
+
+    # ------------------------------------------------------------------ summary text
+    def _bracket_text(self) -> str:
+        rel, asked = self.relative_gap, self.gap_rtol
+        if rel <= asked:
+            how = f"asked {fmt_number(asked)}"
+        elif self.ok:  # the residual met the accuracy; the rest is the rounding allowance
+            how = f"the asked {fmt_number(asked)} plus the certificate's rounding allowance"
+        else:
+            how = f"wider than the asked {fmt_number(asked)}"
+        shown = fmt_bracket(self.lower_bound, self.upper_bound)  # or "0 ± m" around 0
+        return (
+            f"{'in ' if shown.startswith('[') else ''}{shown} (certified, rounded "
+            f"outward), width {fmt_sci(self.width, 3)} (relative {fmt_sci(rel, 3)}, {how})"
+        )
+
+    def _unit(self, n: int) -> str:
+        """``n`` in the unit of :attr:`iterations` for this method."""
+        one, many = _UNITS.get(self.method, ("iteration", "iterations"))
+        return f"{n:,} {one if n == 1 else many}"
+
+    def _stop_text(self) -> str:
+        """Why the method stopped, in words, and what that means with this status."""
+        reason = self.stop_reason
+        what = reason.explain()
+        if reason in (StopReason.MAX_ROUNDS, StopReason.MAX_ITER):
+            what += f" (max_iter = {self.iterations:,})"
+        if reason.is_limit:
+            if self.ok:
+                return f"{what}; the certified bracket is within the asked accuracy all the same"
+            return f"{what} before the certified bracket closed to the asked accuracy"
+        return what if self.ok else f"{what}; the certified bracket is wider than asked"
+
+    def _cuts_text(self) -> str:
+        """The cuts, counted as the log table's ``cuts_added`` column sums them (and, for
+        lift-and-project, those of them in the final master: :attr:`cuts`)."""
+        logged = int(sum(e.cuts_added for e in self.log))
+        if self.extra.get("cut_family") == "monotone":
+            resolved = self.extra.get("resolved")
+            tail = "" if resolved is None else f"; {resolved:,} disjunctions resolved"
+            return (
+                f"{logged:,} monotone cuts over the rounds (each round's master has one per "
+                f"unresolved disjunction; {self.cuts:,} in the last){tail}"
+            )
+        text = f"{self.cuts:,} lift-and-project cuts added to the master"
+        if logged != self.cuts:  # the last round's cuts, found when a limit stopped it
+            text += (
+                f"; the last round found {logged - self.cuts:,} more, not added: "
+                f"{self.stop_reason.explain()}"
+            )
+        return text
+
+
+#: The unit of ``iterations`` per method (one, many).
+_UNITS: dict[str, tuple[str, str]] = {
+    "cutting-planes": ("round", "rounds"),
+    "strategy-iteration": ("strategy evaluated", "strategies evaluated"),
+    "fixed-point": ("value-iteration sweep", "value-iteration sweeps"),
+    "milp": ("MILP solve", "MILP solves"),
+}

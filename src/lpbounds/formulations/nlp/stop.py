@@ -48,5 +48,37 @@ class StopReason(str, Enum):
     def __str__(self) -> str:
         return self.value
 
+    def explain(self) -> str:
+        """What the reason means, in a few words (after the reason itself in a summary:
+        ``"max_rounds: the round limit was reached"``)."""
+        return _EXPLAIN[self]
+
+    @property
+    def is_limit(self) -> bool:
+        """True for a limit (rounds, iterations, time, the MILP solver's): the method did
+        not stop on its own, whatever the certified bracket says."""
+        return self in (
+            StopReason.MAX_ROUNDS,
+            StopReason.MAX_ITER,
+            StopReason.TIME_LIMIT,
+            StopReason.SOLVER_LIMIT,
+        )
+
     def __format__(self, spec: str) -> str:
         return format(self.value, spec)
+
+
+_EXPLAIN: dict[StopReason, str] = {
+    StopReason.GAP_CLOSED: "the method's own bracket on c'w* reached the asked gap",
+    StopReason.MAX_ROUNDS: "the round limit was reached",
+    StopReason.MAX_ITER: "the iteration limit was reached",
+    StopReason.TIME_LIMIT: "the time limit was reached",
+    StopReason.RESIDUAL_TOL: "value iteration reached its residual tolerance",
+    StopReason.STRATEGY_STABLE: "the minimiser's strategy did not change, so its value is exact",
+    StopReason.NO_VIOLATED_DISJUNCTION: "every disjunction holds at the master's point",
+    StopReason.NO_CUT_FOUND: "disjunctions are violated but no valid cut separates them",
+    StopReason.MASTER_STALLED: "no disjunction was resolved either",
+    StopReason.MILP_OPTIMAL: "the MILP solver's status",
+    StopReason.MILP_INACCURATE: "the MILP solver's status: an inaccurate optimum",
+    StopReason.SOLVER_LIMIT: "a limit of the MILP solver other than time (extra['milp_status'])",
+}
