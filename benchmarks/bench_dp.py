@@ -6,8 +6,8 @@ writes the `foundation` section of docs/benchmarks.md.
 
     python benchmarks/bench_dp.py [--repeat 3] [--n 2048000]
 
-``--floor`` instead measures the patrol MDP's sweeps against the memory-bandwidth floor
-(issue 17): this machine's read and copy bandwidth (numba, 1 and all threads, arrays far
+``--floor`` instead measures the patrol MDP's sweeps against the memory-bandwidth floor:
+this machine's read and copy bandwidth (numba, 1 and all threads, arrays far
 larger than the caches), the compulsory bytes of an improvement and an evaluation sweep
 (every array the sweep touches, read or written once), and the sweeps' own times on one
 thread, all threads and the timed choice of ``lpbounds.dp``; writes ``dp-floor``.

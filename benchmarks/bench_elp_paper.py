@@ -1,4 +1,4 @@
-"""The ELP of the paper's instance solved (issue 14, part 4): its section of docs/benchmarks.md.
+"""The ELP of the paper's instance solved: its section of docs/benchmarks.md.
 
 ``models/patrol-paper.toml``: 2,048,000 states, one row per allowed (state, action), about
 4.65M rows. HiGHS' interior point method did not finish it in 600 s (18 iterations, 3.9 GB,
@@ -107,7 +107,7 @@ def report(r: dict, load_before: tuple, load_after: tuple, model: str) -> str:
             "`objective_bracket`). HiGHS' own optimality test (primal and dual feasibility "
             "at the basis, its tolerances) is its claim, not lpbounds': the status is decided "
             "by the certificate. Without the warm start, HiGHS' IPM had not finished after "
-            "600 s (issue 14).",
+            "600 s.",
             "",
         ]
     )

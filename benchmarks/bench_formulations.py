@@ -1,4 +1,4 @@
-"""Performance of the LP formulations (issue 3); writes its section of docs/benchmarks.md.
+"""Performance of the LP formulations; writes its section of docs/benchmarks.md.
 
 Measures, in one run:
 
@@ -178,7 +178,7 @@ def bench_cvxpy_vs_highspy(garnet_states: int, garnet_partitions: int, rounds: i
         "time of `form.solve(...)`, certification included; the medians' ratio. 'stock "
         "cvxpy' is one solve through cvxpy's own HiGHS interface (`problem.solve('HIGHS')`), "
         "which hands HiGHS the rows as `-A x <= -b`: the iterations it took are the 'cvxpy "
-        "tax' issue 14 measured.",
+        "tax' measured when the highspy backend was added.",
         "",
         "| formulation | instance | rows x cols | cvxpy s (compile) | highspy s | ratio "
         "| iterations cvxpy / highspy / stock cvxpy | stock cvxpy s | certified error |",

@@ -1,4 +1,4 @@
-"""pi_s beyond exact DP (issue 16, part 2): Monte Carlo value and Table 1 at 4, 6 and 8 stations.
+"""pi_s beyond exact DP: Monte Carlo value and Table 1 at 4, 6 and 8 stations.
 
 For each model, in a fresh process: the partition bounds (LBLP ``w*``, UBLP ``v*``, fixed
 points with certified errors), the Monte Carlo value of ``pi_s`` (greedy for ``w*``,

@@ -11,7 +11,7 @@ Writes the ``peers`` section of docs/benchmarks.md.
 
     python benchmarks/bench_peers.py [--repeat 3] [--quick]
 
-``--dp`` runs the exact-DP comparison of issue 17 instead (section ``peers-dp``): lpbounds'
+``--dp`` runs the exact-DP comparison instead (section ``peers-dp``): lpbounds'
 default solve, its inexact policy iteration, a 30-line scipy MPI loop, QuantEcon's
 DiscreteDP (state-action form, MPI) and mdpsolver on the patrol MDP, a random MDP of the
 paper's shape (2,048,000 x 3 x 5) and a mid-size one, alternating within each repetition.
@@ -352,7 +352,7 @@ print(json.dumps({{"seconds": ts, "child_peak_mb": peak, "rc": p.returncode,
 """
 
 
-# ---------------------------------------------------------------------- exact DP (issue 17)
+# ---------------------------------------------------------------------- exact DP
 # Each task is a fresh process. "seconds" is the solve alone (model in memory, in the
 # tool's own format); "whole" is from the launch of the process to the answer (interpreter
 # start-up, imports, model build, conversion, solve), taken by the parent's clock and the
@@ -535,7 +535,7 @@ def dp_task(kind: str, tool: str, method: str = "mpi", extra: str = "") -> dict:
 
 
 def main_dp(args: argparse.Namespace) -> None:
-    """The exact-DP comparison of issue 17 (``--dp``): writes the ``peers-dp`` section."""
+    """The exact-DP comparison (``--dp``): writes the ``peers-dp`` section."""
     load0 = os.getloadavg()
     t_start = time.time()
     R: dict[str, list[dict]] = {}
@@ -631,7 +631,7 @@ def dp_body(R: dict, args: argparse.Namespace, load0, load1, wall: float) -> str
             )
         ported.append("| " + " | ".join(cells) + " |")
     return (
-        f"""## Peers: exact DP against scipy, QuantEcon and mdpsolver (issue 17)
+        f"""## Peers: exact DP against scipy, QuantEcon and mdpsolver
 
 Machine: {machine()}. Date: {today()}. Versions: {versions()}, quantecon
 {_version("quantecon")}. Load average (1, 5, 15 min) at start {load0[0]:.2f} {load0[1]:.2f}
@@ -658,7 +658,7 @@ the target 1e-10 max|R| / (1 - discount). mdpsolver is not run on the paper-shap
         + """
 
 Speed-up of lpbounds' default solve over the fastest peer whose answer met the target
-(issue 17's targets: >= 2x in process on the patrol and the paper-shape garnet, >= 1.5x
+(the targets: >= 2x in process on the patrol and the paper-shape garnet, >= 1.5x
 as a whole process):
 
 | model | in process | whole process |
@@ -722,7 +722,7 @@ def main() -> None:
         choices=["numpy", "pymdptoolbox"],
         help="rerun only these peers' exact solves and merge them into the last run's results",
     )
-    ap.add_argument("--dp", action="store_true", help="the exact-DP comparison (issue 17)")
+    ap.add_argument("--dp", action="store_true", help="the exact-DP comparison")
     ap.add_argument("--models", nargs="*", choices=list(DP_MODELS), default=list(DP_MODELS))
     ap.add_argument("--mdpsolver-paper", action="store_true", help="mdpsolver on garnet-paper")
     args = ap.parse_args()
@@ -1053,7 +1053,7 @@ def targets(R, e2e) -> str:
 
     out = [
         "",
-        "Targets (issue 6) against this run:",
+        "The project's performance targets against this run:",
         "",
         "| target | measured | met |",
         "|---|---|---|",
@@ -1075,7 +1075,7 @@ def targets(R, e2e) -> str:
         add("peak memory <= 1 GB (build + solve process)", f"{pk:.0f} MB", pk <= 1024)
     b = t("build/lpbounds")
     if b is not None:
-        add("model build <= 1.5 s (issue 5)", f"{b:.2f} s", b <= 1.5)
+        add("model build <= 1.5 s", f"{b:.2f} s", b <= 1.5)
     ours = min(x for x in (e2e("solve/lpbounds-mpi"), e2e("solve/lpbounds-vi")) if x)
     peers = [e2e(k) for k in ("solve/mdpsolver-vi", "solve/mdpsolver-mpi", "solve/mdpsolver-pi")]
     peers = [x for x in peers if x]

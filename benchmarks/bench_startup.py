@@ -1,7 +1,7 @@
 """Start-up benchmark: ``lpbounds --help``, ``import lpbounds`` and a first solve in a fresh
 environment (an empty numba cache), each in fresh processes.
 
-Targets (issue 13): ``lpbounds --help`` and every ``lpbounds SUBCOMMAND --help`` within
+Targets: ``lpbounds --help`` and every ``lpbounds SUBCOMMAND --help`` within
 0.3 s; ``import lpbounds`` within 0.1 s of ``import numpy, scipy.sparse``; the first solve
 of a small model with an empty numba cache within 3 s. Writes the ``startup`` section of
 docs/benchmarks.md.

@@ -1,4 +1,4 @@
-"""A solver study of the paper's own LPs at the paper's size (issue 14, part 5).
+"""A solver study of the paper's own LPs at the paper's size.
 
 UBLP and LBLP (Theorems 4 and 3), the RLP of the patrol partition (M = 8,900) and the ELP
 (2,048,000 states, about 4.65M rows) of ``models/patrol-paper.toml``, each solved by HiGHS

@@ -12,7 +12,16 @@ scope), this rewrites each docstring for the site only:
   fail ``mkdocs build --strict``), and code otherwise; ``~`` keeps the last component;
 * ``.. math::`` blocks become ``$$ ... $$`` (pymdownx.arithmatex, MathJax) and
   ``:math:`x``` becomes ``$x$``;
-* ``.. note::`` / ``.. warning::`` (and the other admonitions) become ``!!! note``.
+* ``.. note::`` / ``.. warning::`` (and the other admonitions) become ``!!! note``;
+* an inline literal that wraps a line (````a >= b\n   >= c````) is joined onto one line:
+  Markdown reads its second line as a new line of the text, where a leading ``>`` starts a
+  quote, ``#`` a heading and ``-`` a list, and the literal came out torn and mangled;
+* a line of text that starts with ``>`` (``> 0.`` in a parameter's description) keeps it
+  as text: reStructuredText has no ``>`` quotes, Markdown would start one (doctest
+  ``>>>`` lines and ``::`` literal blocks are left alone);
+* a role in a section title (a line underlined with ``---``) becomes plain code: griffe
+  turns the title into an HTML ``class`` too, where a cross-reference's markup would be
+  pasted as escaped text.
 
 ``tests/test_docs.py`` builds the site and fails on any raw role or directive left.
 Configured in ``mkdocs.yml`` under the python handler's ``extensions``.
@@ -29,6 +38,10 @@ ROLE = re.compile(
     r":(?:py:)?(?P<role>class|meth|func|mod|data|attr|exc|obj|const|ref|math):"
     r"`(?P<body>[^`]+)`"
 )
+#: the delimiter of a ````double-backtick```` literal
+DOUBLE_BACKTICK = re.compile(r"(?<!`)``(?!`)")
+#: a line of text that Markdown would read as a block quote (not a doctest prompt)
+QUOTE_START = re.compile(r"^(?P<indent>[ \t]*)>(?!>>)")
 DIRECTIVE = re.compile(r"^(?P<indent>[ \t]*)\.\. (?P<name>[a-z-]+)::[ \t]*(?P<rest>.*)$")
 ADMONITIONS = {
     "note", "warning", "seealso", "important", "tip", "caution", "danger", "attention",
@@ -127,8 +140,65 @@ def _directives(text: str) -> str:
     return "\n".join(out)
 
 
+def _join_literals(text: str) -> str:
+    """Every inline literal of ``text`` that wraps a line, on one line.
+
+    The delimiters are paired in order within each paragraph (blocks between blank
+    lines), as Markdown pairs them; only the inside of a pair is touched.
+    """
+    out = []
+    for para in re.split(r"(\n[ \t]*\n)", text):
+        marks = [m.start() for m in DOUBLE_BACKTICK.finditer(para)]
+        pieces, last = [], 0
+        for start, end in zip(marks[0::2], marks[1::2], strict=False):  # an odd mark: unpaired
+            body = para[start + 2 : end]
+            pieces += [para[last:start], "``", re.sub(r"[ \t]*\n[ \t]*", " ", body), "``"]
+            last = end + 2
+        out.append("".join(pieces) + para[last:])
+    return "".join(out)
+
+
+def _indent(line: str) -> int:
+    return len(line) - len(line.lstrip())
+
+
+def _escape_quotes(text: str) -> str:
+    """``text`` with a leading ``>`` of each line of text escaped (see the module docstring).
+
+    A line ending in ``::`` opens a literal block: the lines after it that are blank or
+    indented deeper are code and are left as they are.
+    """
+    out, block = [], None  # block: the indent of the line that opened a literal block
+    for line in text.split("\n"):
+        if block is not None and (not line.strip() or _indent(line) > block):
+            out.append(line)
+            continue
+        block = _indent(line) if line.rstrip().endswith("::") else None
+        out.append(QUOTE_START.sub(lambda m: m["indent"] + "\\>", line, count=1))
+    return "\n".join(out)
+
+
+def _plain_role(match: re.Match[str]) -> str:
+    body = match["body"].strip()
+    if match["role"] == "math":
+        return f"${body}$"
+    titled = re.fullmatch(r"(?P<title>.+?)\s*<(?P<target>[^>]+)>", body)
+    name = titled["title"] if titled else body.lstrip("!")
+    return f"`{name[1:].rsplit('.', 1)[-1] if name.startswith('~') else name}`"
+
+
+def _titles(text: str) -> str:
+    """``text`` with the roles of its section titles (lines over a ``---`` line) plain."""
+    lines = text.split("\n")
+    for k in range(len(lines) - 1):
+        if re.fullmatch(r"[ \t]*-{3,}[ \t]*", lines[k + 1]) and lines[k].strip():
+            lines[k] = ROLE.sub(_plain_role, lines[k])
+    return "\n".join(lines)
+
+
 def rewrite(obj: griffe.Object, text: str) -> str:
     """The docstring ``text`` of ``obj`` with its roles and directives in Markdown."""
+    text = _titles(_escape_quotes(_join_literals(text)))
     return ROLE.sub(lambda m: _role(obj, m), _directives(text))
 
 

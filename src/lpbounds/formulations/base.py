@@ -526,7 +526,8 @@ class Formulation:
         ``>=`` constraint, its ``dual_value`` the group's duals ``>= 0``.
     variable_columns, constraint_rows : dict of str to slice
         Where each variable / group sits in the stacked ``x`` / rows of ``A``.
-    A, b, c : the stacked data (``A`` CSR).
+    A, b, c : scipy.sparse.csr_matrix, ndarray, ndarray
+        The stacked data.
     """
 
     name: str = "LP"
@@ -1181,7 +1182,8 @@ class Formulation:
         if status in (Status.OPTIMAL, Status.INACCURATE):
             status = Status.OPTIMAL if accurate else Status.INACCURATE
         values, state_values, mu, extra = self._interpret(x, y)
-        extra = {**extra, **run.extra}
+        # the solver's own word for its answer, beside lpbounds' status from the certificate
+        extra = {**extra, "solver_status": run.message, **run.extra}
         return LPResult(
             formulation=self.name,
             status=status,

@@ -51,9 +51,9 @@ class RLP(RowsLP):
         ``"bellman"``: eq. 9, ``v(i) >= R_u(x) + lambda sum_l p_l v(f-bar(x, u, Y_l))``,
         one sparse vector constraint over the merged rows; its duals are
         ``result.group_duals["bellman"]`` (spread over pairs: ``result.mu``).
-
-    Add constraints of your own with ``solve(extra_constraints=[rlp.v[i] <= rlp.v[j]])``
-    (:meth:`~lpbounds.formulations.base.Formulation.solve`: what stays certified).
+        Add constraints of your own with
+        ``solve(extra_constraints=[rlp.v[i] <= rlp.v[j]])``
+        (:meth:`~lpbounds.formulations.base.Formulation.solve`: what stays certified).
 
     Notes
     -----
