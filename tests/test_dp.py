@@ -340,7 +340,7 @@ def test_auto_eval_sweeps_waits_for_a_settled_policy():
     check_dp(res, mdp, ref.values, ref.error, "auto")
 
 
-# ---------------------------------------------------------------------- issue 10 item 4
+# ------------------------------------------------------- statuses, action masks, hostile starts
 def test_status_is_the_single_source_of_truth():
     """OPTIMAL when the residual reached tol, ITERATION_LIMIT at max_iter; ``converged``
     is derived from the status (not a second stored flag that could disagree)."""

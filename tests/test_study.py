@@ -287,7 +287,7 @@ def test_dask_scheduler_matches_local():
     )
 
 
-# ---------------------------------------------------------------------- issue 14
+# ---------------------------------------------------------------------- solver studies
 def test_lp_solvers_read_from_cvxpy_classes(monkeypatch):
     """LP-capable = a conic class with Zero and NonNeg cones, or a QP class: an NLP solver
     (IPOPT) and DIFFCP (SCS differentiated) are left out whatever cvxpy reports."""

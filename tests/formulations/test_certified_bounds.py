@@ -6,7 +6,7 @@ MDPs with action masks, discounts up to 0.9999, reward scales 1e-6..1e6, random 
 and costs with zeros, for every installed solver of the battery, whatever status the solver
 reported; and each must be as narrow as the returned point's residual (recomputed here)
 implies, an OPTIMAL one within its requested accuracy. The regression cases are those of
-issue 10 (a 202-state queue at 0.99, garnets with rewards of 1e-6).
+the hostile-input review (a 202-state queue at 0.99, garnets with rewards of 1e-6).
 """
 
 from __future__ import annotations

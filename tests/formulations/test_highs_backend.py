@@ -1,4 +1,4 @@
-"""The highspy backend and cvxpy's HiGHS path (issue 14, part 4).
+"""The highspy backend and cvxpy's HiGHS path.
 
 Every formulation solved with ``backend="highspy"`` must give what the cvxpy path gives
 (same point within the certificate, duals with the same sign convention), both must lie

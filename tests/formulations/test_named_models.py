@@ -1,4 +1,4 @@
-"""The cvxpy models in the paper's symbols (issue 12, items 1-2).
+"""The cvxpy models in the paper's symbols.
 
 Item 1: every formulation's ``problem`` has one named variable per symbol and one named
 vector constraint per equation; the groups are checked against the paper's equations with

@@ -1,4 +1,4 @@
-"""Monotone cuts and box resolution for the NLP (issue 15).
+"""Monotone cuts and box resolution for the NLP.
 
 Every round's master is checked at ``w*``: the certified lower point ``l`` and the upper
 point ``h`` bracket it, and every master row (single-term rows, resolved rows, monotone

@@ -1,4 +1,4 @@
-"""The disjunctive NLP (eq. 25) with state-dependent action sets (issue 10, item 3).
+"""The disjunctive NLP (eq. 25) with state-dependent action sets.
 
 A disjunction ``(i, u)`` is implied by the Bellman inequalities of ``V*`` only when ``u``
 is allowed at every state of ``S_i`` (a state forbidding ``u`` contributes the term

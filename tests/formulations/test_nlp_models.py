@@ -1,4 +1,4 @@
-"""The NLP (eq. 25) as cvxpy models (issue 12, item 3): ``NLP(...).problem`` (the big-M
+"""The NLP (eq. 25) as cvxpy models: ``NLP(...).problem`` (the big-M
 MILP) and ``NLP(...).master`` (the cutting-plane master LP, updated round by round).
 
 References independent of the package's NLP code: ``reference_w`` (value iteration by plain

@@ -86,8 +86,8 @@ def test_values_match_value_iteration_on_p(name, discount):
     assert mdp.sink and mdp.n_states == n + 1 and mdp.n_user_states == n
     assert mdp.n_actions == int(env.action_space.n)
     ref = value_iteration(env, discount)
-    # the default tol is too loose for 1e-9 on FrozenLake at 0.99 (issue 23 item 3)
-    res = lb.solve_exact(mdp, tol=_tight_tol(env))
+    # default settings: the default accuracy (DP_RTOL max|R|) passes a 1e-9 cross-check
+    res = lb.solve_exact(mdp)
     v = mdp.user_values(res.values)
     assert v.shape == (n,)
     np.testing.assert_allclose(v, ref, rtol=0, atol=1e-9)

@@ -222,7 +222,7 @@ def test_bounds_command_on_the_small_instance(tmp_path):
     assert res["lemma3"]["pairs_differing"] == 4  # 2 stations x 2 directions, taubar = 4
 
 
-# ---------------------------------------------------------------------- action sets (issue 10)
+# ---------------------------------------------------------------------- action sets
 def test_allowed_actions_are_constant_on_each_partition(case):
     """The NLP keeps (i, u) only if u is allowed at every state of S_i. On the patrol
     partitions the allowed actions are a function of the key (l, d, A_l), so that rule
