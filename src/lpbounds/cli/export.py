@@ -10,6 +10,7 @@ from rich.table import Table
 from rich.text import Text
 
 from ..errors import ValidationError
+from ..text import fmt_seconds
 from ._common import add_model_argument, check_output_dir, print_table, progress
 
 EXAMPLES = """\
@@ -137,5 +138,8 @@ def _table(result: Any) -> Table:
         )
     else:
         t.add_row("optimum", f"none: {opt['reason']}")
-    t.add_row("time (s)", ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()))
+    t.add_row(
+        "time",
+        ", ".join(f"{k.replace('_', ' ')} {fmt_seconds(v)}" for k, v in result.seconds.items()),
+    )
     return t

@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--steps",
         type=positive_int,
         default=60_000,
-        help="Monte Carlo steps per seed (default: 60000)",
+        help="Monte Carlo steps per seed (default: 60,000)",
     )
     p.add_argument(
         "--solver", default="HIGHS", help="LP solver for UBLP/LBLP: HIGHS (default) or CLARABEL"
@@ -75,7 +75,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=(5, 6),
         default=[5, 6],
         metavar="M",
-        help="the numbers of stations --beyond solves exactly: 5, 6 or both (default: 5 6)",
+        help="the numbers of stations --beyond solves exactly: 5, 6 or both (default: 5 and 6)",
     )
     p.set_defaults(func=run)
 
