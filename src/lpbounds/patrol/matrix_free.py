@@ -26,7 +26,7 @@ the maximum keeps the first maximising action; a sweep returns the extremes of
 :func:`lpbounds.evaluate_policy`'s iterative method (:func:`lpbounds.dp.mpi_loop`,
 :func:`lpbounds.dp.evaluation_loop`: the same ``eval_sweeps`` rule, the Porteus shift
 carried as a scalar offset, the thread choice), with the default tolerance
-``DP_RTOL max|R| / (1 - lambda)``, and both return the array path's vectors bit for bit
+``dp_default_tol``, and both return the array path's vectors bit for bit
 (``tests/patrol/test_matrix_free.py`` checks it; ``benchmarks/bench_beyond.py`` on the
 paper's instance). Only the memory differs: the loops keep two value vectors (4.3 GB each
 at 6 stations) and form ``u + c`` in place, and the policy is int8.
@@ -52,7 +52,7 @@ from ..dp import DPResult, PolicyEvaluation, check_eval_sweeps, evaluation_loop,
 from ..errors import ConvergenceError, ValidationError
 from ..rows import PolicySweeps
 from ..stochastic import RowSums, row_sums
-from ..tolerances import DP_RTOL, GREEDY_TIE_RTOL, dp_scale, error_bound
+from ..tolerances import GREEDY_TIE_RTOL, dp_default_tol, error_bound
 from ..validation import check_int
 from .model import PatrolModel, decode_kernel, successor_kernel
 from .params import PatrolParams
@@ -722,8 +722,8 @@ class MatrixFreePatrol:
         return self.row_sums().modulus(self.discount)
 
     def default_tol(self) -> float:
-        """:func:`lpbounds.solve_exact`'s default: ``DP_RTOL max|R| / (1 - lambda)``."""
-        return DP_RTOL * dp_scale(self.reward_absmax, self.discount)
+        """:func:`lpbounds.solve_exact`'s default (:func:`lpbounds.tolerances.dp_default_tol`)."""
+        return dp_default_tol(self.reward_absmax, self.discount, self.n_outcomes)
 
     # ------------------------------------------------------------------ sweep protocol
     def new_vector(self) -> np.ndarray:
