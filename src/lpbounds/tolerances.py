@@ -78,6 +78,15 @@ EXPORT_DP_RTOL: float = 1e-12
 #: extrapolates with the rows' mean effective discount.
 DP_OFFSET_ROWSUM_ATOL: float = 1e-12
 
+
+def offset_folds(row_delta: float) -> bool:
+    """True when rows whose sums are certified within ``row_delta`` of 1 are not
+    stochastic to rounding (:data:`DP_OFFSET_ROWSUM_ATOL`): the exact DP then folds its
+    Porteus offset into the iterate after every sweep (``dp.PorteusShift``), and its
+    default tolerance has the higher floor of :func:`dp_default_tol`."""
+    return float(row_delta) > DP_OFFSET_ROWSUM_ATOL
+
+
 #: The share of the stopping tolerance that the error of a carried Porteus offset,
 #: ``lambda |c| delta``, may take: beyond it the offset is folded into the iterate
 #: before the next sweep, so the added error never keeps the loop from reaching its
@@ -127,13 +136,14 @@ def dp_default_tol(
     discount: float,
     n_outcomes: int,
     rtol: float | None = None,
-    folds_offset: bool = False,
+    row_delta: float = 0.0,
 ) -> float:
     """The exact DP's default residual tolerance: ``max(rtol max|R|, floor)``.
 
     ``rtol`` is :data:`DP_RTOL` unless given (:data:`EXPORT_DP_RTOL` for an exported LP's
-    reference optimum). ``folds_offset``: the rows are not stochastic to rounding
-    (:data:`DP_OFFSET_ROWSUM_ATOL`), so the loops add the Porteus offset into the vector
+    reference optimum). ``row_delta`` is the rows' certified distance of their sums from 1
+    (``RowSums.delta``): when :func:`offset_folds` says the rows are not stochastic to
+    rounding, the loops add the Porteus offset into the vector
     after every sweep, and that addition's rounding (``eps max|V|``) is extrapolated by the
     next shift (``lambda / (1 - lambda)``): the floor is then divided by ``1 - discount``
     once more. Measured: rows summing to ``1 + 9e-10`` at discount 0.999 stalled at a
@@ -149,7 +159,7 @@ def dp_default_tol(
 
     scale = dp_scale(rewards_absmax, discount)
     floor = DP_FLOOR_ULPS * (int(n_outcomes) + 3) * float(np.finfo(np.float64).eps) * scale
-    if folds_offset and discount < 1.0:
+    if offset_folds(row_delta) and discount < 1.0:
         floor /= 1.0 - float(discount)
     return max((DP_RTOL if rtol is None else float(rtol)) * float(rewards_absmax), floor)
 

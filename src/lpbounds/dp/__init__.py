@@ -123,10 +123,10 @@ from ..status import Status
 from ..stochastic import RowSums, bellman_margin
 from ..tolerances import (
     DP_OFFSET_CARRY_SHARE,
-    DP_OFFSET_ROWSUM_ATOL,
     GREEDY_TIE_RTOL,
     dp_default_tol,
     error_bound,
+    offset_folds,
 )
 from ..validation import (
     MAX_VALUE_SCALE,
@@ -213,8 +213,7 @@ def _default_tol(rows: BellmanRows | PostDecisionRows, tol: float | None) -> flo
         rmax, n_out = rows.reward_absmax, int(rows.outcomes.shape[1])
     else:
         rmax, n_out = float(np.abs(rows.reward).max(initial=0.0)), rows.n_outcomes
-    folds = rows.row_sums().delta > DP_OFFSET_ROWSUM_ATOL  # PorteusShift.fold
-    tol_ = dp_default_tol(rmax, rows.discount, n_out, folds_offset=folds)
+    tol_ = dp_default_tol(rmax, rows.discount, n_out, row_delta=rows.row_sums().delta)
     if not np.isfinite(tol_):  # refused by FiniteMDP / from_arrays (MAX_VALUE_SCALE)
         raise ValidationError(f"the value scale max|R| / (1 - discount) of {rmax} overflows")
     return tol_
@@ -940,7 +939,7 @@ class PorteusShift:
     def __init__(self, discount: float, sums: RowSums, tol: float = np.inf) -> None:
         self.lam = float(discount)
         self.delta = sums.delta
-        self.fold = self.delta > DP_OFFSET_ROWSUM_ATOL
+        self.fold = offset_folds(self.delta)
         # the most a carried offset may add to the residual (DP_OFFSET_CARRY_SHARE)
         self.carry_limit = DP_OFFSET_CARRY_SHARE * float(tol)
         if self.fold:
