@@ -87,6 +87,16 @@ def offset_folds(row_delta: float) -> bool:
     return float(row_delta) > DP_OFFSET_ROWSUM_ATOL
 
 
+#: The periodic-chain floor of :func:`dp_default_tol`, in units of ``eps max|R| / (1 -
+#: lambda)^2``. Rounding adds about ``eps |V|`` to the iterate every sweep; on a periodic
+#: chain (period 2: x -> y -> x) the alternating error mode decays at ``lambda`` only (the
+#: Porteus shift removes the constant mode alone), so that rounding accumulates to about
+#: ``eps max|V| / (1 - lambda)`` and the residual stalls there. Measured (hypothesis cases
+#: of tests/test_row_sums.py, rewards ~1e-3, discount 0.999): MPI stalled at a residual
+#: of ``0.48 eps max|R| / (1 - lambda)^2`` (9.7e-14 against a default of 9.1e-15), and
+#: policy evaluation at 8.021e-15 against 8.020e-15. 2 leaves a factor 4.
+DP_NOISE_ULPS: float = 2.0
+
 #: The share of the stopping tolerance that the error of a carried Porteus offset,
 #: ``lambda |c| delta``, may take: beyond it the offset is folded into the iterate
 #: before the next sweep, so the added error never keeps the loop from reaching its
@@ -154,14 +164,23 @@ def dp_default_tol(
     trusted to reach at any discount (:data:`DP_FLOOR_ULPS`). The certified error bound
     of the result is then at most ``DP_RTOL`` of the value scale where the floor does not
     bind (discounts up to about ``1 - 5e-3`` for ``L <= 40``).
+
+    A second floor, ``DP_NOISE_ULPS eps max|R| / (1 - discount)^2``, is the residual that
+    rounding keeps alive on a periodic chain (see :data:`DP_NOISE_ULPS`); it binds only
+    above discount 0.99 (it is ``4.4e-12 max|R|`` there).
     """
     import numpy as np
 
+    eps = float(np.finfo(np.float64).eps)
     scale = dp_scale(rewards_absmax, discount)
-    floor = DP_FLOOR_ULPS * (int(n_outcomes) + 3) * float(np.finfo(np.float64).eps) * scale
-    if offset_folds(row_delta) and discount < 1.0:
-        floor /= 1.0 - float(discount)
-    return max((DP_RTOL if rtol is None else float(rtol)) * float(rewards_absmax), floor)
+    floor = DP_FLOOR_ULPS * (int(n_outcomes) + 3) * eps * scale
+    noise = DP_NOISE_ULPS * eps * scale
+    if discount < 1.0:
+        noise /= 1.0 - float(discount)
+        if offset_folds(row_delta):
+            floor /= 1.0 - float(discount)
+    rel = (DP_RTOL if rtol is None else float(rtol)) * float(rewards_absmax)
+    return max(rel, floor, noise)
 
 
 # ---------------------------------------------------------------------- NLP (eq. 25)
