@@ -36,6 +36,11 @@ KEYS = {
     "lp_interval",
     "exact_interval",
     "detail",
+    "solves",
+    "solve_seconds",
+    "compile_seconds",
+    "lp_status",
+    "solver_status",
 }
 CHECKS = {"Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2"}
 
@@ -150,6 +155,31 @@ def test_normal_run_all_holds(normal_records):
         assert r["verdict"] == "holds", r
         assert 0 <= r["width"] <= r["accuracy"], r
     json.dumps(recs)  # plain types only
+
+
+def test_records_count_their_solves_and_name_the_solvers_status(normal_records):
+    """n_costs = 2 LPs per objective claim, IB for L = 1..5, LLP with 2 costs d, one SLP;
+    none for exact DP. Every point HiGHS and Clarabel returned here is optimal, in
+    lpbounds' status and in the solver's own word."""
+    expected = {
+        "optimal value = c'(exact)": 2,
+        "optimum = exact (c > 0)": 2,
+        "feasible points >= v*": 2,
+        "SLP(mu-bar) = v*": 1,
+        "IB blocks = v*": 5,
+        "IB feasible point >= v*": 5,
+        "LLP v >= v*": 2,
+    }
+    seen = set()
+    for r in normal_records:
+        if r["solver"] in ("exact", "all") or r["claim"] == "reduced MDP value = v*":
+            assert r["solves"] == 0 and r["lp_status"] == r["solver_status"] == ""
+            continue
+        seen.add(r["claim"])
+        assert r["solves"] == expected[r["claim"]], r
+        assert r["lp_status"] == "optimal" and r["solver_status"] == "optimal", r
+        assert r["solve_seconds"] > 0 and r["compile_seconds"] >= 0
+    assert seen == set(expected)
 
 
 def test_intervals_contain_an_independent_v_star(tiny_instance, normal_records):

@@ -89,6 +89,7 @@ _SUBMODULES: dict[str, str] = {
             "model",
             "outputs",
             "patrol",
+            "plot",
             "results",
             "rows",
             "status",
@@ -106,6 +107,7 @@ _SUBMODULES: dict[str, str] = {
     "partition": "model.partition",
     "study": "studies.compare",
     "verify": "studies.verify",
+    "campaign": "studies.campaign",
 }
 
 __all__ = [

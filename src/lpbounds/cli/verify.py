@@ -1,18 +1,33 @@
 """``lpbounds verify [MODEL]``: theorem verdicts (holds / violated / inconclusive) per solver.
 
 Exit status 1 only when a claim is *violated* (the certified intervals prove it false);
-``--strict`` also fails on *inconclusive*. See :mod:`lpbounds.studies.verify`."""
+``--strict`` also fails on *inconclusive*. See :mod:`lpbounds.studies.verify`.
+
+With ``--out DIR`` it runs a campaign (:mod:`lpbounds.studies.campaign`): ``--random N``
+instances drawn from the families, records streamed to DIR per batch, resumed when the
+same command is run again, violated instances shrunk to model files."""
 
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from rich import box
 from rich.markup import escape
 from rich.table import Table
 
+from ..errors import ValidationError
+from ..text import fmt_number, fmt_sci
 from ..tolerances import LP_COMPARE_RTOL
-from ._common import console, print_table, progress
+from ._common import (
+    console,
+    err_console,
+    nonnegative_int,
+    positive_float,
+    positive_int,
+    print_table,
+    progress,
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,7 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "compare certified intervals with the exact fixed points (value iteration): each "
             "claim holds, is violated (the intervals prove it false) or is inconclusive (not "
             "accurate enough to decide). Exits 1 only on a violated claim (--strict: also on "
-            "an inconclusive one)."
+            "an inconclusive one). With --out DIR: a campaign of --random N instances drawn "
+            "from the families, streamed to DIR, resumable, counterexamples shrunk."
         ),
     )
     p.add_argument(
@@ -44,26 +60,130 @@ def register(sub: argparse._SubParsersAction) -> None:
         "installed here; a missing solver is refused with its install command, an unknown name "
         "with the list of installed ones)",
     )
-    p.add_argument("--random", type=int, default=5, metavar="N", help="random instances (5)")
+    p.add_argument(
+        "--random",
+        type=nonnegative_int,
+        default=5,
+        metavar="N",
+        help="random instances (default 5): seeded garnets, or with --out the campaign's instances",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the random instances and costs")
-    p.add_argument("--costs", type=int, default=3, metavar="K", help="random costs per LP (3)")
+    p.add_argument(
+        "--costs",
+        type=nonnegative_int,
+        default=3,
+        metavar="K",
+        help="random costs per LP (default 3)",
+    )
     p.add_argument(
         "--rtol",
         type=float,
         default=LP_COMPARE_RTOL,
         help="requested accuracy relative to max|R|/(1-lambda): a claim holds when the "
-        f"certified intervals allow no larger difference ({LP_COMPARE_RTOL:g})",
+        f"certified intervals allow no larger difference (default {fmt_number(LP_COMPARE_RTOL)})",
     )
     p.add_argument("--strict", action="store_true", help="also exit 1 when a claim is inconclusive")
-    p.add_argument("--max-states", type=int, default=10_000, help="size cap of default models")
+    p.add_argument(
+        "--max-states",
+        type=positive_int,
+        default=10_000,
+        help="size cap of the default models (default 10,000)",
+    )
     p.add_argument("--json", metavar="PATH", help="also write the records as JSON")
+    p.add_argument(
+        "--claims",
+        nargs="+",
+        metavar="CLAIM",
+        default=None,
+        help="the claims to check (default all built in): 'Lemma 1', theorem1, lemma2, "
+        "theorem2, remark2, or a conjecture of your own as FILE.py:NAME or module:NAME "
+        "(a Conjecture or a predicate over a Trial)",
+    )
+    _add_campaign_arguments(p)
     p.set_defaults(func=run)
+
+
+def _add_campaign_arguments(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group(
+        "campaign (with --out DIR: --random N instances drawn from the families)"
+    )
+    g.add_argument(
+        "--out",
+        metavar="DIR",
+        default=None,
+        help="run a campaign into DIR: records written per batch as they finish "
+        "(batches/), records.csv, summary.csv, counterexamples/, metadata.json; the same "
+        "command run again resumes it",
+    )
+    g.add_argument(
+        "--families",
+        nargs="+",
+        metavar="FAMILY",
+        default=None,
+        help="instance families: garnet, masked-garnet, shelf, patrol (default all)",
+    )
+    g.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="run through Dask: an existing cluster (tcp://127.0.0.1:8786) or a local "
+        "scheduler (synchronous, threads, processes); pip install 'lpbounds[study]'",
+    )
+    g.add_argument(
+        "--batch-size",
+        type=positive_int,
+        default=10,
+        metavar="K",
+        help="instances per batch (default 10)",
+    )
+    g.add_argument(
+        "--format",
+        choices=("csv", "parquet"),
+        default="csv",
+        help="the batch files' format (default csv; parquet needs pyarrow)",
+    )
+    g.add_argument(
+        "--shrink-inconclusive",
+        action="store_true",
+        help="also shrink the instances of inconclusive records (violated ones always are)",
+    )
+    g.add_argument(
+        "--shrink-seconds",
+        type=positive_float,
+        default=60.0,
+        metavar="S",
+        help="time budget of each shrink in seconds (default 60)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     from ..formulations import resolve_solver
+    from ..studies.claims import load_claim
+    from ..studies.verify import default_solvers
+
+    claims = None if args.claims is None else [load_claim(c) for c in args.claims]
+    if args.out is not None:
+        return _run_campaign(args, claims)
+    given = [
+        opt
+        for opt, value in (
+            ("--families", args.families),
+            ("--scheduler", args.scheduler),
+            ("--shrink-inconclusive", args.shrink_inconclusive or None),
+        )
+        if value is not None
+    ]
+    if given:
+        raise ValidationError(f"{given[0]} belongs to a campaign: give --out DIR as well")
+    solvers = [resolve_solver(s) for s in (args.solvers or default_solvers())]
+    return _run_models(args, solvers, claims)
+
+
+def _run_models(args: argparse.Namespace, solvers: list[str], claims: list | None) -> int:
+    """The packaged models (or MODEL) and --random N seeded garnets, every record shown."""
+    from ..studies.claims import BuiltinClaim, Conjecture, resolve_claims, run_claims
     from ..studies.verify import (
-        default_solvers,
+        INSTANCE_CHECKS,
         exit_status,
         model_instances,
         random_instances,
@@ -72,7 +192,10 @@ def run(args: argparse.Namespace) -> int:
         write_json,
     )
 
-    solvers = [resolve_solver(s) for s in (args.solvers or default_solvers())]
+    chosen = resolve_claims(claims)
+    checks = [c.check for c in chosen if isinstance(c, BuiltinClaim) and c.check != "Remark 2"]
+    conjectures = [c for c in chosen if isinstance(c, Conjecture)]
+    remark2 = any(isinstance(c, BuiltinClaim) and c.check == "Remark 2" for c in chosen)
     insts, skipped = model_instances(
         None if args.model is None else [args.model], max_states=args.max_states
     )
@@ -82,17 +205,24 @@ def run(args: argparse.Namespace) -> int:
         task = prog.add_task("verifying", total=len(insts) + 1, status="")
         for inst in insts:
             prog.update(task, description=f"verifying {inst.name}")
-            records += verify_instance(
-                inst,
-                solvers,
-                n_costs=args.costs,
-                seed=args.seed,
-                rtol=args.rtol,
-                progress=lambda msg: prog.update(task, status=msg),
-            )
+            if checks:
+                records += verify_instance(
+                    inst,
+                    solvers,
+                    n_costs=args.costs,
+                    seed=args.seed,
+                    rtol=args.rtol,
+                    progress=lambda msg: prog.update(task, status=msg),
+                    checks=None if len(checks) == len(INSTANCE_CHECKS) else checks,
+                )
+            if conjectures:
+                records += run_claims(
+                    inst, conjectures, solvers, n_costs=args.costs, seed=args.seed, rtol=args.rtol
+                )
             prog.advance(task)
-        prog.update(task, description="Remark 2 (soft aggregation)")
-        records += verify_remark2(solvers, seed=args.seed, rtol=args.rtol)
+        if remark2:
+            prog.update(task, description="Remark 2 (soft aggregation)")
+            records += verify_remark2(solvers, seed=args.seed, rtol=args.rtol)
         prog.advance(task)
     for table in _records_tables(records):
         print_table(table)
@@ -105,6 +235,120 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         write_json(records, args.json)
     return exit_status(records, strict=args.strict)
+
+
+def _run_campaign(args: argparse.Namespace, claims: list | None) -> int:
+    """``--out DIR``: a campaign of --random N drawn instances, streamed to DIR."""
+    from pathlib import Path
+
+    from ..studies.campaign import run_campaign
+
+    if args.model is not None:
+        raise ValidationError(
+            f"MODEL ({args.model!r}) and --out: a campaign draws its instances from "
+            "--families; verify a model without --out"
+        )
+    if args.json:
+        raise ValidationError("--json and --out: a campaign writes DIR/records.csv")
+    out = Path(args.out)
+    with progress() as prog:
+        task = prog.add_task("campaign", total=None, status="")
+
+        def report(done: int, total: int, note: str) -> None:
+            prog.update(task, total=total, completed=done, description=f"campaign {out}")
+            prog.update(task, status=note)
+            if not err_console.is_terminal:  # a log file: one plain line per batch
+                err_console.print(
+                    f"lpbounds verify: {done}/{total} {note}", highlight=False, soft_wrap=True
+                )
+
+        try:
+            result = run_campaign(
+                args.random,
+                args.seed,
+                families=args.families,
+                claims=claims,
+                solvers=args.solvers,
+                n_costs=args.costs,
+                rtol=args.rtol,
+                out=out,
+                fmt=args.format,
+                batch_size=args.batch_size,
+                scheduler=args.scheduler,
+                shrink_inconclusive=args.shrink_inconclusive,
+                shrink_seconds=args.shrink_seconds,
+                progress=report,
+                command_line=["lpbounds", *getattr(args, "argv", [])],
+            )
+        except KeyboardInterrupt:
+            done = len(list((out / "batches").glob(f"*.{args.format}")))
+            err_console.print(
+                f"lpbounds verify: {done} finished batch{'es' if done != 1 else ''} kept in "
+                f"{str(out)!r}; run the same command again to resume",
+                highlight=False,
+                soft_wrap=True,
+            )
+            raise
+    _print_campaign(result)
+    return result.exit_status(strict=args.strict)
+
+
+#: Counterexamples listed on the console (the smallest first; all are in counterexamples.csv).
+SHOWN_COUNTEREXAMPLES = 10
+
+
+def _print_counterexamples(result: Any) -> None:
+    cexs = sorted(
+        result.counterexamples,
+        key=lambda c: (c.shrunk["states"], c.shrunk["blocks"], c.shrunk["actions"]),
+    )
+    table = Table(
+        title=f"{len(cexs)} counterexamples, shrunk (model files lpbounds solve and verify read)",
+        title_justify="left",
+        box=box.SIMPLE_HEAD,
+        show_edge=False,
+        padding=(0, 1, 0, 0),
+    )
+    for col in ("check", "solver", "states", "actions", "blocks", "shrunk from"):
+        table.add_column(col, no_wrap=True, justify="right" if col[-1] == "s" else "left")
+    for c in cexs[:SHOWN_COUNTEREXAMPLES]:
+        table.add_row(
+            escape(c.check),
+            c.solver,
+            str(c.shrunk["states"]),
+            str(c.shrunk["actions"]),
+            str(c.shrunk["blocks"]),
+            f"{c.instance} ({c.original['states']} states)",
+        )
+    print_table(table)
+    folder = escape(str(result.out / "counterexamples"))
+    more = len(cexs) - SHOWN_COUNTEREXAMPLES
+    console.print(
+        (f"... and {more} more; " if more > 0 else "")
+        + f"model files in {folder}/ (one per row, named after the instance; "
+        "counterexamples.csv lists them)",
+        highlight=False,
+    )
+
+
+def _print_campaign(result: Any) -> None:
+    counts = result.verdicts()
+    resumed = (
+        f" ({result.batches_resumed} of {result.batches_run + result.batches_resumed} batches "
+        "from an earlier run)"
+        if result.batches_resumed
+        else ""
+    )
+    console.print(
+        f"lpbounds verify: {result.params['n']:,} instances, {len(result.frame):,} records: "
+        f"{counts['holds']:,} hold, {counts['inconclusive']:,} inconclusive, "
+        f"{counts['violated']:,} violated in {result.seconds:.1f} s{resumed}",
+        highlight=False,
+    )
+    print_table(_summary_table(result.records()))
+    if result.counterexamples:
+        _print_counterexamples(result)
+    console.print(f"records: {escape(str(result.out / 'records.csv'))}", highlight=False)
 
 
 _STYLE = {"holds": "green", "inconclusive": "yellow", "violated": "bold red"}
@@ -169,9 +413,9 @@ def _record_cells(r: dict) -> tuple[str, ...]:
         r["check"],
         r["solver"],
         _verdict(r["verdict"]),
-        f"{r['width']:.1e}",
-        f"{r['deviation']:.1e}",
-        f"{r['accuracy']:.1e}",
+        fmt_sci(r["width"]),
+        fmt_sci(r["deviation"]),
+        fmt_sci(r["accuracy"]),
         f"{escape(r['claim'])}: [dim]{escape(detail)}[/dim]",
     )
 
@@ -196,7 +440,7 @@ def _summary_table(records: list[dict]) -> Table:
             str(row["inconclusive"]),
             str(row["violated"]),
             _verdict(row["verdict"]),
-            f"{row['width']:.2e}",
-            f"{row['accuracy']:.2e}",
+            fmt_sci(row["width"], 3),
+            fmt_sci(row["accuracy"], 3),
         )
     return summary

@@ -29,7 +29,10 @@ a wide (still valid) bracket, which gives *inconclusive*, not *violated*.
 Record keys: ``check`` (the paper's result), ``claim`` (what was compared), ``instance``,
 ``solver`` ("exact" for solver-free checks, "all" across solvers), ``verdict``, ``width``,
 ``deviation`` (distance of the interval midpoints), ``accuracy``, ``index``,
-``lp_interval``, ``exact_interval``, ``detail``.
+``lp_interval``, ``exact_interval``, ``detail``, and the LP solves the record rests on
+(:class:`Tally`): ``solves``, ``solve_seconds``, ``compile_seconds``, ``lp_status``,
+``solver_status``. :func:`records_frame` (and ``to_pandas()`` of a :class:`VerifyResult`)
+gives them as a table, one row per record, with the columns :data:`RECORD_COLUMNS`.
 
 The claims (``c`` are ``n_costs`` random non-negative costs: the first strictly positive,
 the others with zeros):
@@ -68,10 +71,10 @@ the others with zeros):
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, NamedTuple, cast
 
 import numpy as np
 
@@ -86,7 +89,7 @@ from ..certification.checks import (
     lp_objective_bracket,
 )
 from ..dp import exact_rows, solve_exact
-from ..errors import LPBoundsError, ValidationError
+from ..errors import ConvergenceError, LPBoundsError, ValidationError
 from ..formulations import (
     ELP,
     IB,
@@ -108,19 +111,33 @@ from ..status import Verdict
 from ..tolerances import LP_COMPARE_RTOL, dp_scale
 
 __all__ = [
+    "EXACT_METHODS",
+    "INSTANCE_CHECKS",
+    "RECORD_COLUMNS",
     "RELIABLE_LP_SOLVERS",
+    "Tally",
     "VerifyInstance",
+    "VerifyResult",
     "alp_value_bracket",
     "default_solvers",
+    "estimated_states",
+    "exact_interval",
     "exit_status",
+    "flat_record",
     "lemma2_slack",
+    "make_record",
     "model_instances",
     "random_instances",
+    "records_frame",
     "run_verification",
     "summarize",
+    "try_solve",
     "verify_instance",
     "verify_remark2",
 ]
+
+if TYPE_CHECKING:  # annotations only
+    import pandas as pd
 
 Record = dict[str, Any]
 Progress = Callable[[str], None]
@@ -145,6 +162,10 @@ RELIABLE_LP_SOLVERS: tuple[str, ...] = (
 
 #: Number of IB blocks checked for Theorem 2.
 IB_BLOCKS: tuple[int, ...] = (1, 2, 3, 4, 5)
+
+#: The checks :func:`verify_instance` makes, in its order (Remark 2 is an existence claim,
+#: checked once per run by :func:`verify_remark2`).
+INSTANCE_CHECKS: tuple[str, ...] = ("Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2")
 
 
 def default_solvers() -> list[str]:
@@ -209,7 +230,7 @@ def model_instances(
                 raise ValidationError(f"instance {inst.name!r} has no [partition]: cannot verify")
             continue
         if not explicit:
-            size = _estimated_states(inst)
+            size = estimated_states(inst)
             if size is None or size > max_states:
                 skipped.append(inst.name)
                 continue
@@ -218,8 +239,20 @@ def model_instances(
     return out, skipped
 
 
-def _estimated_states(inst: Any) -> int | None:
-    """The number of states of an instance without building it (None if unknown)."""
+def estimated_states(inst: Any) -> int | None:
+    """The number of states of an instance without building it (None if unknown).
+
+    Parameters
+    ----------
+    inst : lpbounds.model.instances.Instance
+        A loaded instance file (its MDP not built).
+
+    Returns
+    -------
+    int or None
+        ``[model] n_states`` when the file gives it, a patrol model's count from its
+        parameters, else None.
+    """
     size = inst.config["model"].get("n_states")
     if isinstance(size, int):
         return size
@@ -236,10 +269,56 @@ def _estimated_states(inst: Any) -> int | None:
 _EPS = float(np.finfo(np.float64).eps)
 
 
-def _record(
-    check: str, claim: str, instance: str, solver: str, cmp: Comparison, detail: str = ""
+@dataclass
+class Tally:
+    """The LP solves behind one record: their number, times and statuses.
+
+    ``lp_status`` is lpbounds' status of each returned point (decided from its certificate,
+    :class:`~lpbounds.status.Status`; ``"none"`` when no point came back), ``solver_status``
+    the solver's own answer as cvxpy reports it (``"optimal"``, ``"optimal_inaccurate"``,
+    ...; ``"error"`` when the solve raised): the distinct values in order, comma-joined.
+    """
+
+    solves: int = 0
+    solve_seconds: float = 0.0
+    compile_seconds: float = 0.0
+    lp: list[str] = field(default_factory=list)
+    own: list[str] = field(default_factory=list)
+
+    def add(self, res: LPResult | None) -> None:
+        """Count one solve (``res`` None: the solve returned no point)."""
+        self.solves += 1
+        if res is None:
+            self.lp.append("none")
+            self.own.append("error")
+            return
+        self.solve_seconds += float(res.solve_seconds or 0.0)
+        self.compile_seconds += float(res.compile_seconds or 0.0)
+        self.lp.append(str(res.status))
+        own = res.extra.get("solver_status") or res.extra.get("message")
+        self.own.append(str(own or "unknown"))
+
+    def fields(self) -> Record:
+        """The record keys this tally fills."""
+        return {
+            "solves": self.solves,
+            "solve_seconds": self.solve_seconds,
+            "compile_seconds": self.compile_seconds,
+            "lp_status": ",".join(dict.fromkeys(self.lp)),
+            "solver_status": ",".join(dict.fromkeys(self.own)),
+        }
+
+
+def make_record(
+    check: str,
+    claim: str,
+    instance: str,
+    solver: str,
+    cmp: Comparison,
+    detail: str = "",
+    tally: Tally | None = None,
 ) -> Record:
-    """A JSON-able record of one verdict."""
+    """A JSON-able record of one verdict (``tally``: the solves it rests on, none if None)."""
     return {
         "check": check,
         "claim": claim,
@@ -253,6 +332,7 @@ def _record(
         "lp_interval": list(cmp.a_interval),
         "exact_interval": list(cmp.b_interval),
         "detail": detail,
+        **(tally or Tally()).fields(),
     }
 
 
@@ -272,6 +352,24 @@ def _random_costs(n: int, k: int, rng: np.random.Generator) -> list[np.ndarray]:
             c[rng.integers(n)] = 1.0
         costs.append(c)
     return costs
+
+
+def try_solve(form: Any, solver: str) -> tuple[LPResult | None, str]:
+    """Solve ``form`` with ``solver`` for a check: ``(result, "")`` when a point came back
+    (whatever its status: its certified bracket is valid), else ``(None, why)``; a solver
+    that raises or crashes is such a ``why``, never an exception.
+
+    Parameters
+    ----------
+    form : Formulation
+    solver : str
+        An installed cvxpy LP solver.
+
+    Returns
+    -------
+    (LPResult or None, str)
+    """
+    return _solve(form, solver)
 
 
 def _solve(form: Any, solver: str) -> tuple[LPResult | None, str]:
@@ -297,20 +395,59 @@ class _Refs:
     accuracy: float
     costs: list[np.ndarray]
     d_list: list[np.ndarray]
+    method: str = "mpi"
+
+    def exact(self, model: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The certified interval of a model's or row system's fixed point."""
+        return exact_interval(model, self.method)
 
 
-def _references(inst: VerifyInstance, n_costs: int, seed: int, rtol: float) -> _Refs:
+#: The methods of :func:`~lpbounds.dp.solve_exact` a check may use for its exact side.
+EXACT_METHODS: tuple[str, ...] = ("mpi", "vi", "pi", "ipi")
+
+
+def exact_interval(model: Any, method: str = "mpi") -> tuple[np.ndarray, np.ndarray]:
+    """The certified interval ``[values - error_bound, values + error_bound]`` (rounded
+    outward) of the fixed point of ``model`` by :func:`~lpbounds.dp.solve_exact`.
+
+    A method other than MPI that stops short of the tolerance raises
+    :class:`~lpbounds.errors.ConvergenceError` in :func:`~lpbounds.dp.solve_exact`; it is
+    then redone by MPI (policy iteration stops at a stable policy, which leaves a
+    residual of rounding size that a tolerance set near the rounding floor can miss: seen
+    on about 1 % of a campaign's instances, at reward scales near 1e-4).
+
+    Parameters
+    ----------
+    model : FiniteMDP or BellmanRows
+    method : str
+        One of :data:`EXACT_METHODS`.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+    """
+    try:
+        return dp_interval(solve_exact(model, cast(Any, method)))  # a name of EXACT_METHODS
+    except ConvergenceError:
+        if method == "mpi":
+            raise
+        return dp_interval(solve_exact(model, "mpi"))
+
+
+def _references(
+    inst: VerifyInstance, n_costs: int, seed: int, rtol: float, method: str = "mpi"
+) -> _Refs:
     mdp, part = inst.mdp, inst.partition
     rng = np.random.default_rng([seed, mdp.n_states, part.n_partitions])
-    vfull_lo, vfull_hi = dp_interval(solve_exact(mdp))
+    vfull_lo, vfull_hi = exact_interval(mdp, method)
     rlp_rows = BellmanRows.aggregate(mdp, part, reduce="max")
-    v_lo, v_hi = dp_interval(solve_exact(rlp_rows))
+    v_lo, v_hi = exact_interval(rlp_rows, method)
     costs = _random_costs(mdp.n_states, n_costs, rng)
     # LLP's surplus costs: one dense, one with about half zeros
     d_list = [rng.uniform(0.0, 1.0, (mdp.n_states, mdp.n_actions)) for _ in range(2)]
     d_list[1][rng.random(d_list[1].shape) < 0.5] = 0.0
     scale = dp_scale(float(np.abs(mdp.rewards[mdp.allowed]).max(initial=0.0)), mdp.discount)
-    return _Refs(vfull_lo, vfull_hi, v_lo, v_hi, rlp_rows, rtol * scale, costs, d_list)
+    return _Refs(vfull_lo, vfull_hi, v_lo, v_hi, rlp_rows, rtol * scale, costs, d_list, method)
 
 
 def _optimum_claims(
@@ -328,54 +465,69 @@ def _optimum_claims(
 
 
 # ---------------------------------------------------------------------- solver-free checks
-def _exact_checks(inst: VerifyInstance, refs: _Refs) -> list[Record]:
-    """Phi v* >= V*; every VI iterate from a feasible start dominates v*; IB's fixed point."""
+def _exact_checks(
+    inst: VerifyInstance, refs: _Refs, checks: tuple[str, ...] = INSTANCE_CHECKS
+) -> list[Record]:
+    """Phi v* >= V*; every VI iterate from a feasible start dominates v*; IB's fixed point
+    (those of ``checks``)."""
+    out: list[Record] = []
+    if "Lemma 1" in checks:
+        out.append(_lemma1_exact(inst, refs))
+    if "Theorem 1" in checks:
+        out.append(_theorem1_exact(inst, refs))
+    if "Theorem 2" in checks:
+        out.append(_theorem2_exact(inst, refs))
+    return out
+
+
+def _lemma1_exact(inst: VerifyInstance, refs: _Refs) -> Record:
+    part, acc = inst.partition, refs.accuracy
+    return make_record(
+        "Lemma 1",
+        "Phi v* >= V*",
+        inst.name,
+        "exact",
+        compare_at_least(
+            part.lift(refs.v_lo), part.lift(refs.v_hi), refs.vfull_lo, refs.vfull_hi, acc
+        ),
+        "RLP's bound dominates the exact value (both exact DP)",
+    )
+
+
+def _theorem1_exact(inst: VerifyInstance, refs: _Refs) -> Record:
     from ..certification.certificate import certify
 
-    mdp, part, name, acc = inst.mdp, inst.partition, inst.name, refs.accuracy
-    out = [
-        _record(
-            "Lemma 1",
-            "Phi v* >= V*",
-            name,
-            "exact",
-            compare_at_least(
-                part.lift(refs.v_lo), part.lift(refs.v_hi), refs.vfull_lo, refs.vfull_hi, acc
-            ),
-            "RLP's bound dominates the exact value (both exact DP)",
-        )
-    ]
+    mdp, part, acc = inst.mdp, inst.partition, refs.accuracy
     u = np.full(part.n_partitions, float(refs.rlp_rows.reward.max()) / (1.0 - mdp.discount))
     cmps = []
     for _ in range(50):
         u, _ = refs.rlp_rows.apply_max(u)
         feas = certify(refs.rlp_rows, u).upper  # the computed iterate, made certainly feasible
         cmps.append(compare_at_least(feas, feas, refs.v_lo, refs.v_hi, acc))
-    out.append(
-        _record(
-            "Theorem 1",
-            "feasible points >= v*",
-            name,
-            "exact",
-            combine(cmps),
-            "50 iterates T^k(max R/(1-lambda)), each certified feasible",
-        )
+    return make_record(
+        "Theorem 1",
+        "feasible points >= v*",
+        inst.name,
+        "exact",
+        combine(cmps),
+        "50 iterates T^k(max R/(1-lambda)), each certified feasible",
     )
+
+
+def _theorem2_exact(inst: VerifyInstance, refs: _Refs) -> Record:
+    mdp, part, acc = inst.mdp, inst.partition, refs.accuracy
     cmps = []
     for L in IB_BLOCKS:
-        lo, hi = dp_interval(solve_exact(IB(mdp, part, L).rows))
+        lo, hi = refs.exact(IB(mdp, part, L).rows)
         cmps.append(compare_equal(lo, hi, np.tile(refs.v_lo, L), np.tile(refs.v_hi, L), acc))
-    out.append(
-        _record(
-            "Theorem 2",
-            "fixed point of IB = (v*, ..., v*)",
-            name,
-            "exact",
-            combine(cmps),
-            f"IB's cyclic rows, L = {IB_BLOCKS[0]}..{IB_BLOCKS[-1]} (exact DP)",
-        )
+    return make_record(
+        "Theorem 2",
+        "fixed point of IB = (v*, ..., v*)",
+        inst.name,
+        "exact",
+        combine(cmps),
+        f"IB's cyclic rows, L = {IB_BLOCKS[0]}..{IB_BLOCKS[-1]} (exact DP)",
     )
-    return out
 
 
 # ---------------------------------------------------------------------- per solver
@@ -387,12 +539,14 @@ def _cost_claims(
     ref_lo: np.ndarray,
     ref_hi: np.ndarray,
     acc: float,
-) -> tuple[list[Record], list[Comparison], LPResult | None]:
+) -> tuple[list[Record], list[Comparison], LPResult | None, Tally]:
     """Objective and per-entry verdicts over the costs, the domination comparisons of the
-    certified feasible points, and the first cost's result (for Lemma 2)."""
+    certified feasible points, the first cost's result (for Lemma 2) and the solves' tally."""
     objs, entries, doms, fail, first = [], [], [], "", None
+    tally = Tally()
     for k, (form, cost) in enumerate(forms):
         res, msg = _solve(form, solver)
+        tally.add(res)
         if res is None:
             objs.append(_no_point(acc))
             entries.append(_no_point(acc))
@@ -407,27 +561,29 @@ def _cost_claims(
         doms.append(compare_at_least(feas, feas, ref_lo, ref_hi, acc))
     n = len(forms)
     recs = [
-        _record(
+        make_record(
             check,
             "optimal value = c'(exact)",
             name,
             solver,
             combine(objs),
             fail or f"{n} costs ({n - 1} with zeros); objective bracket vs exact",
+            tally,
         )
     ]
     if entries:
         recs.append(
-            _record(
+            make_record(
                 check,
                 "optimum = exact (c > 0)",
                 name,
                 solver,
                 combine(entries),
                 fail or "per entry, strictly positive cost (unique optimum)",
+                tally,
             )
         )
-    return recs, doms, first
+    return recs, doms, first, tally
 
 
 def _lemma2_checks(
@@ -439,7 +595,7 @@ def _lemma2_checks(
         slp = SLP(inst.mdp, inst.partition, rlp_res.mu)
     except LPBoundsError as exc:
         cmp = _no_point(acc)
-        return [_record("Lemma 2", "SLP(mu-bar) = v*", name, solver, cmp, f"SLP failed: {exc}")]
+        return [make_record("Lemma 2", "SLP(mu-bar) = v*", name, solver, cmp, f"SLP failed: {exc}")]
     sigma = lemma2_slack(rlp, rlp_res, refs.v_lo, refs.v_hi)
     beta = float(
         np.nextafter(sigma / (1.0 - contraction_modulus(slp.rows)) * (1 + 4 * _EPS), np.inf)
@@ -447,15 +603,17 @@ def _lemma2_checks(
     pred_lo = np.nextafter(refs.v_lo - beta, -np.inf)
     note = f"predicted [v* - {beta:.2e}, v*] from the duals' certified slack"
     res, msg = _solve(slp, solver)
+    tally = Tally()
+    tally.add(res)
     if res is None:
         cmp, detail = _no_point(acc), msg
     else:
         br = lp_bracket(slp, res)
         cmp, detail = compare_equal(br.lower, br.upper, pred_lo, refs.v_hi, acc), note
-    red_lo, red_hi = dp_interval(solve_exact(slp.reduced_mdp()))
+    red_lo, red_hi = refs.exact(slp.reduced_mdp())
     return [
-        _record("Lemma 2", "SLP(mu-bar) = v*", name, solver, cmp, detail),
-        _record(
+        make_record("Lemma 2", "SLP(mu-bar) = v*", name, solver, cmp, detail, tally),
+        make_record(
             "Lemma 2",
             "reduced MDP value = v*",
             name,
@@ -518,10 +676,11 @@ def lemma2_slack(rlp: Any, result: LPResult, v_lo: np.ndarray, v_hi: np.ndarray)
 def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Record]:
     """IB: every block = v* (and its certified feasible point >= v*); LLP: v >= v*."""
     name, acc, mdp, part = inst.name, refs.accuracy, inst.mdp, inst.partition
-    eq, dom, fail = [], [], ""
+    eq, dom, fail, tally = [], [], "", Tally()
     for L in IB_BLOCKS:
         ib = IB(mdp, part, L)
         res, msg = _solve(ib, solver)
+        tally.add(res)
         if res is None:
             eq.append(_no_point(acc))
             dom.append(_no_point(acc))
@@ -533,20 +692,22 @@ def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Rec
         dom.append(compare_at_least(br.upper, br.upper, lo, hi, acc))
     span = f"IB L={IB_BLOCKS[0]}..{IB_BLOCKS[-1]}"
     out = [
-        _record("Theorem 2", "IB blocks = v*", name, solver, combine(eq), fail or span),
-        _record(
+        make_record("Theorem 2", "IB blocks = v*", name, solver, combine(eq), fail or span, tally),
+        make_record(
             "Theorem 2",
             "IB feasible point >= v*",
             name,
             solver,
             combine(dom),
             fail or f"{span}: certified feasible point, every block",
+            tally,
         ),
     ]
-    llp, fail = [], ""
+    llp, fail, tally = [], "", Tally()
     for d in refs.d_list:
         form = LLP(mdp, part, d)
         res, msg = _solve(form, solver)
+        tally.add(res)
         if res is None:
             llp.append(_no_point(acc))
             fail = msg
@@ -554,13 +715,14 @@ def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Rec
         feas = lp_bracket(form, _LLPView(res)).upper
         llp.append(compare_at_least(feas, feas, refs.v_lo, refs.v_hi, acc))
     out.append(
-        _record(
+        make_record(
             "Theorem 2",
             "LLP v >= v*",
             name,
             solver,
             combine(llp),
             fail or f"LLP with {len(refs.d_list)} random d >= 0: certified feasible v",
+            tally,
         )
     )
     return out
@@ -588,7 +750,7 @@ def _across_solvers(name: str, firsts: dict[str, tuple[Any, LPResult]], acc: flo
         for b in list(brs.values())[i + 1 :]
     ]
     return [
-        _record(
+        make_record(
             "Theorem 1",
             "RLP optima agree",
             name,
@@ -599,6 +761,60 @@ def _across_solvers(name: str, firsts: dict[str, tuple[Any, LPResult]], acc: flo
     ]
 
 
+def _check_names(checks: Iterable[str] | None) -> tuple[str, ...]:
+    """The selected checks of :data:`INSTANCE_CHECKS` (all when None), in their order."""
+    if checks is None:
+        return INSTANCE_CHECKS
+    chosen = list(checks)
+    unknown = [c for c in chosen if c not in INSTANCE_CHECKS]
+    if unknown:
+        raise ValidationError(
+            f"checks: unknown check {unknown[0]!r}; known: {', '.join(INSTANCE_CHECKS)}"
+        )
+    return tuple(c for c in INSTANCE_CHECKS if c in chosen)
+
+
+def _solver_checks(
+    inst: VerifyInstance, refs: _Refs, solver: str, checks: tuple[str, ...]
+) -> tuple[list[Record], tuple[Any, LPResult] | None]:
+    """One solver's records of ``checks`` and its first RLP solve (for "RLP optima agree")."""
+    mdp, part, name, acc = inst.mdp, inst.partition, inst.name, refs.accuracy
+    records: list[Record] = []
+    if "Lemma 1" in checks:
+        elps = [(ELP(mdp, c), c) for c in refs.costs]
+        records += _cost_claims("Lemma 1", name, solver, elps, refs.vfull_lo, refs.vfull_hi, acc)[0]
+    first_rlp = None
+    if "Theorem 1" in checks or "Lemma 2" in checks:
+        m = part.n_partitions
+        rlps = [
+            (RLP(mdp, part, c), np.bincount(part.labels, weights=c, minlength=m))
+            for c in refs.costs
+        ]
+        recs, doms, first, tally = _cost_claims(
+            "Theorem 1", name, solver, rlps, refs.v_lo, refs.v_hi, acc
+        )
+        if "Theorem 1" in checks:
+            records += recs
+            records.append(
+                make_record(
+                    "Theorem 1",
+                    "feasible points >= v*",
+                    name,
+                    solver,
+                    combine(doms),
+                    f"certified feasible point of each of the {len(rlps)} RLP solves",
+                    tally,
+                )
+            )
+        if first is not None:
+            first_rlp = (rlps[0][0], first)
+            if "Lemma 2" in checks:
+                records += _lemma2_checks(inst, refs, solver, rlps[0][0], first)
+    if "Theorem 2" in checks:
+        records += _theorem2_checks(inst, refs, solver)
+    return records, first_rlp
+
+
 def verify_instance(
     inst: VerifyInstance,
     solvers: Sequence[str],
@@ -607,6 +823,8 @@ def verify_instance(
     seed: int = 0,
     rtol: float = LP_COMPARE_RTOL,
     progress: Progress | None = None,
+    checks: Iterable[str] | None = None,
+    exact_method: str = "mpi",
 ) -> list[Record]:
     """Lemma 1, Theorem 1, Lemma 2 and Theorem 2 on one instance, for each solver.
 
@@ -624,6 +842,13 @@ def verify_instance(
         the intervals allow no difference larger than that.
     progress : callable(str), optional
         Called before each solver's checks.
+    checks : iterable of str, optional
+        The checks to make, names of :data:`INSTANCE_CHECKS` (default all of them).
+    exact_method : str
+        The method of :func:`~lpbounds.dp.solve_exact` for every exact fixed point
+        (:data:`EXACT_METHODS`; the certified intervals are valid whichever it is): MPI
+        by default; policy iteration (``"pi"``) is far faster on small models at discounts
+        near 1 (a 6-state model at 0.9994: 0.03 s against 6 s), so campaigns use it.
 
     Returns
     -------
@@ -634,43 +859,25 @@ def verify_instance(
         raise ValidationError(f"n_costs must be >= 1; got {n_costs}")
     if not (np.isfinite(rtol) and rtol > 0):
         raise ValidationError(f"rtol must be a positive finite number; got {rtol!r}")
+    chosen = _check_names(checks)
+    if exact_method not in EXACT_METHODS:
+        raise ValidationError(
+            f"exact_method: unknown method {exact_method!r}; known: {', '.join(EXACT_METHODS)}"
+        )
     names = [resolve_solver(s) for s in solvers]
-    mdp, part, name = inst.mdp, inst.partition, inst.name
-    refs = _references(inst, n_costs, seed, rtol)
-    records = _exact_checks(inst, refs)
+    refs = _references(inst, n_costs, seed, rtol, exact_method)
+    records = _exact_checks(inst, refs, chosen)
     firsts: dict[str, tuple[Any, LPResult]] = {}
     for solver in names:
         if progress is not None:
-            progress(f"{name}: {solver}")
-        elps = [(ELP(mdp, c), c) for c in refs.costs]
-        recs, _, _ = _cost_claims(
-            "Lemma 1", name, solver, elps, refs.vfull_lo, refs.vfull_hi, refs.accuracy
-        )
+            progress(f"{inst.name}: {solver}")
+        recs, first = _solver_checks(inst, refs, solver, chosen)
         records += recs
-        m = part.n_partitions
-        rlps = [
-            (RLP(mdp, part, c), np.bincount(part.labels, weights=c, minlength=m))
-            for c in refs.costs
-        ]
-        recs, doms, first = _cost_claims(
-            "Theorem 1", name, solver, rlps, refs.v_lo, refs.v_hi, refs.accuracy
-        )
-        records += recs
-        records.append(
-            _record(
-                "Theorem 1",
-                "feasible points >= v*",
-                name,
-                solver,
-                combine(doms),
-                f"certified feasible point of each of the {len(rlps)} RLP solves",
-            )
-        )
         if first is not None:
-            firsts[solver] = (rlps[0][0], first)
-            records += _lemma2_checks(inst, refs, solver, rlps[0][0], first)
-        records += _theorem2_checks(inst, refs, solver)
-    return records + _across_solvers(name, firsts, refs.accuracy)
+            firsts[solver] = first
+    if "Theorem 1" not in chosen:
+        return records
+    return records + _across_solvers(inst.name, firsts, refs.accuracy)
 
 
 # ---------------------------------------------------------------------- Remark 2
@@ -795,19 +1002,24 @@ def verify_remark2(
     costs = [ex.cost1, ex.cost2, ex.cost1 + ex.cost2]
     out = []
     for solver in names:
-        brackets, fail = [], ""
+        brackets, fail, tally = [], "", Tally()
         for c in costs:
             res, msg = _solve(ALP(ex.mdp, ex.basis, c), solver)
+            tally.add(res)
             fail = fail or msg
             brackets.append(
                 (None, None) if res is None else alp_value_bracket(ex.mdp, ex.basis, c, res)
             )
-        out.append(_remark2_record(inst, solver, brackets, fail))
+        out.append(_remark2_record(inst, solver, brackets, fail, tally))
     return out
 
 
 def _remark2_record(
-    inst: str, solver: str, brackets: list[tuple[Fraction | None, Fraction | None]], fail: str
+    inst: str,
+    solver: str,
+    brackets: list[tuple[Fraction | None, Fraction | None]],
+    fail: str,
+    tally: Tally,
 ) -> Record:
     (_lo1, hi1), (_lo2, hi2), (lo12, hi12) = brackets
     inf = float("inf")
@@ -835,7 +1047,7 @@ def _remark2_record(
         "certified OPT(c1+c2) - OPT(c1) - OPT(c2) > 0: no common optimum (exact rational "
         "brackets); lp_interval = OPT(c1+c2), exact_interval = upper OPT(c1) + OPT(c2)"
     )
-    return _record("Remark 2", "ALP optimum depends on c", inst, solver, cmp, detail)
+    return make_record("Remark 2", "ALP optimum depends on c", inst, solver, cmp, detail, tally)
 
 
 def run_verification(
@@ -849,7 +1061,7 @@ def run_verification(
     max_states: int = 10_000,
     include_models: bool = True,
     progress: Progress | None = None,
-) -> tuple[list[Record], list[str]]:
+) -> VerifyResult:
     """Every check on the models and ``n_random`` random instances, for each solver.
 
     Parameters
@@ -864,8 +1076,9 @@ def run_verification(
 
     Returns
     -------
-    (records, skipped)
-        ``skipped``: default models left out for their size.
+    VerifyResult
+        ``(records, skipped)``, a named tuple: ``skipped`` are the default models left out
+        for their size; ``to_pandas()`` gives the records as a table.
     """
     solver_names = [resolve_solver(s) for s in (solvers or default_solvers())]
     insts: list[VerifyInstance] = []
@@ -881,7 +1094,87 @@ def run_verification(
     if progress is not None:
         progress("Remark 2")
     records += verify_remark2(solver_names, seed=seed, rtol=rtol)
-    return records, skipped
+    return VerifyResult(records, skipped)
+
+
+#: The columns of :func:`records_frame`, in order: the record keys (see the module
+#: docstring) with ``lp_interval`` and ``exact_interval`` split into their ends
+#: ``lp_lo``, ``lp_hi``, ``exact_lo``, ``exact_hi``. ``verdict`` is the verdict's word.
+RECORD_COLUMNS: tuple[str, ...] = (
+    "check",
+    "claim",
+    "instance",
+    "solver",
+    "verdict",
+    "width",
+    "deviation",
+    "accuracy",
+    "index",
+    "lp_lo",
+    "lp_hi",
+    "exact_lo",
+    "exact_hi",
+    "detail",
+    "solves",
+    "solve_seconds",
+    "compile_seconds",
+    "lp_status",
+    "solver_status",
+)
+
+
+def flat_record(record: Record) -> Record:
+    """A record with plain values only: the intervals split into their ends, the verdict
+    as its word (the row of :func:`records_frame`, and of a campaign's CSV files)."""
+    out = {k: v for k, v in record.items() if k not in ("lp_interval", "exact_interval")}
+    nan = (float("nan"), float("nan"))
+    out["lp_lo"], out["lp_hi"] = (float(t) for t in record.get("lp_interval", nan))
+    out["exact_lo"], out["exact_hi"] = (float(t) for t in record.get("exact_interval", nan))
+    out["verdict"] = str(record["verdict"])
+    return out
+
+
+def records_frame(records: Sequence[Record]) -> pd.DataFrame:
+    """The records as a table, one row per record: :data:`RECORD_COLUMNS` first, then any
+    other keys the records carry (a campaign's instance columns), in order of appearance.
+
+    Parameters
+    ----------
+    records : sequence of dict
+        Records of :func:`verify_instance`, :func:`verify_remark2` or a campaign.
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    import pandas as pd
+
+    rows = [flat_record(r) for r in records]
+    extra = list(dict.fromkeys(k for r in rows for k in r if k not in RECORD_COLUMNS))
+    return pd.DataFrame.from_records(rows, columns=[*RECORD_COLUMNS, *extra])
+
+
+class VerifyResult(NamedTuple):
+    """What :func:`run_verification` returns: the records and the models skipped for
+    their size (a named tuple, so ``records, skipped = run_verification(...)`` works)."""
+
+    records: list[Record]
+    skipped: list[str]
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The records as a table (:func:`records_frame`, columns :data:`RECORD_COLUMNS`)."""
+        return records_frame(self.records)
+
+    def summary(self) -> pd.DataFrame:
+        """One row per (check, solver): verdict counts and the worst record
+        (:func:`summarize`)."""
+        import pandas as pd
+
+        return pd.DataFrame.from_records(summarize(self.records))
+
+    def exit_status(self, strict: bool = False) -> int:
+        """1 if a record is *violated* (with ``strict``, also *inconclusive*), else 0."""
+        return exit_status(self.records, strict=strict)
 
 
 _CHECK_ORDER = ["Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2", "Remark 2"]

@@ -1,0 +1,511 @@
+r"""The claims a verification campaign checks: the paper's, built in, and your own conjectures.
+
+A **claim** is checked on one instance (an MDP and a partition) and gives records, one per
+solver, each with a :class:`~lpbounds.status.Verdict` (*holds*, *violated*,
+*inconclusive*; see :mod:`lpbounds.studies.verify`):
+
+* :class:`BuiltinClaim` -- one of the paper's results as
+  :func:`~lpbounds.studies.verify.verify_instance` checks it (``"Lemma 1"``,
+  ``"Theorem 1"``, ``"Lemma 2"``, ``"Theorem 2"``), every claim of that check for every
+  solver;
+* :class:`Conjecture` -- a predicate you write over a :class:`Trial` (the instance, one
+  solver, exact fixed points and certified LP solves on demand), returning a verdict.
+
+A conjecture's predicate returns one of
+
+* a :class:`~lpbounds.certification.checks.Comparison` (from :meth:`Trial.equal` or
+  :meth:`Trial.at_least`, which compare *certified intervals* as the built-in checks do:
+  *violated* only when the intervals prove the claim false) -- the record then carries
+  its width, deviation and intervals;
+* a :class:`~lpbounds.status.Verdict`, or its word (``"holds"``, ...);
+* a bool: ``True`` is *holds*, ``False`` is *violated*. A bool is taken as proof either
+  way, so a predicate that compares floating-point numbers without a margin can report
+  rounding as a counterexample: return a Comparison (or *inconclusive*) where the answer
+  is not certain;
+* any of these paired with a string, ``(verdict, "why")``, which becomes ``detail``.
+
+A predicate that raises gives an *inconclusive* record whose ``error`` says what was
+raised (a crash is a finding of the campaign, and the other instances still run).
+
+Conjectures are pickled to run on Dask workers: write them as module-level functions
+(or lambdas, which Dask's cloudpickle carries by value).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..certification.checks import (
+    Bracket,
+    Comparison,
+    compare_at_least,
+    compare_equal,
+    lp_bracket,
+)
+from ..errors import ValidationError
+from ..formulations.base import LPResult
+from ..rows import BellmanRows
+from ..status import Verdict
+from ..tolerances import LP_COMPARE_RTOL, dp_scale
+from .verify import (
+    INSTANCE_CHECKS,
+    Record,
+    Tally,
+    VerifyInstance,
+    exact_interval,
+    make_record,
+    try_solve,
+    verify_instance,
+    verify_remark2,
+)
+
+__all__ = [
+    "BUILTIN_CLAIMS",
+    "REMARK2",
+    "BuiltinClaim",
+    "Claim",
+    "Conjecture",
+    "Interval",
+    "Solved",
+    "Trial",
+    "claim_names",
+    "load_claim",
+    "resolve_claims",
+    "run_claims",
+    "run_remark2",
+]
+
+#: A certified interval vector: ``(lower, upper)``, one entry per state or block.
+Interval = tuple[np.ndarray, np.ndarray]
+
+#: The word of a Remark 2 claim: an existence claim, checked once per run, not per instance.
+REMARK2 = "Remark 2"
+
+
+class Solved(NamedTuple):
+    """An LP solved by :meth:`Trial.solve`: the result (None without a point), its certified
+    bracket (``(-inf, inf)`` without a point) and why there is no point (else "")."""
+
+    result: LPResult | None
+    bracket: Bracket
+    message: str
+
+
+class _Exact:
+    """The exact fixed points of one instance, computed once and shared by its trials."""
+
+    def __init__(self, inst: VerifyInstance, method: str = "mpi") -> None:
+        self.inst = inst
+        self.method = method
+        self._vstar: Interval | None = None
+        self._rlp: Interval | None = None
+
+    def vstar(self) -> Interval:
+        if self._vstar is None:
+            self._vstar = exact_interval(self.inst.mdp, self.method)
+        return self._vstar
+
+    def rlp(self) -> Interval:
+        if self._rlp is None:
+            rows = BellmanRows.aggregate(self.inst.mdp, self.inst.partition, reduce="max")
+            self._rlp = exact_interval(rows, self.method)
+        return self._rlp
+
+
+def _as_interval(x: Any) -> Interval:
+    """``(lo, hi)`` from an interval pair, or a point (an array) as a zero-width interval."""
+    if isinstance(x, tuple | list) and len(x) == 2 and not np.isscalar(x[0]):
+        return np.asarray(x[0], dtype=np.float64), np.asarray(x[1], dtype=np.float64)
+    a = np.asarray(x, dtype=np.float64)
+    return a, a
+
+
+@dataclass
+class Trial:
+    """One instance as a conjecture sees it, with one solver (None for solver-free claims).
+
+    Attributes
+    ----------
+    instance : VerifyInstance
+        The instance (a campaign's carries its ``family`` and ``seed``).
+    solver : str or None
+        The solver the trial's :meth:`solve` uses.
+    rtol : float
+        The requested accuracy relative to ``max|R| / (1 - lambda)``.
+    tally : Tally
+        The solves made through :meth:`solve` (their times and statuses go into the record).
+    exact_method : str
+        The method of :func:`~lpbounds.solve_exact` behind :meth:`vstar`,
+        :meth:`rlp_values` and :meth:`exact` (``"mpi"``; a campaign uses ``"pi"``).
+    """
+
+    instance: VerifyInstance
+    solver: str | None
+    rtol: float = LP_COMPARE_RTOL
+    tally: Tally = field(default_factory=Tally)
+    exact_method: str = "mpi"
+    _exact: _Exact | None = field(default=None, repr=False)
+
+    @property
+    def mdp(self) -> Any:
+        """The MDP (:class:`~lpbounds.FiniteMDP`)."""
+        return self.instance.mdp
+
+    @property
+    def partition(self) -> Any:
+        """The partition (:class:`~lpbounds.Partition`)."""
+        return self.instance.partition
+
+    @property
+    def accuracy(self) -> float:
+        """The requested accuracy in value units: ``rtol * max|R| / (1 - lambda)``."""
+        mdp = self.mdp
+        rmax = float(np.abs(mdp.rewards[mdp.allowed]).max(initial=0.0))
+        return self.rtol * dp_scale(rmax, mdp.discount)
+
+    def _fixed(self) -> _Exact:
+        if self._exact is None:
+            self._exact = _Exact(self.instance, self.exact_method)
+        return self._exact
+
+    # ------------------------------------------------------------------ exact sides
+    def vstar(self) -> Interval:
+        """``V*`` per state as a certified interval (exact DP, :func:`~lpbounds.solve_exact`)."""
+        return self._fixed().vstar()
+
+    def rlp_values(self) -> Interval:
+        """RLP's optimum ``v*`` per block as a certified interval (the exact fixed point of
+        RLP's rows, Theorem 4: no LP solver involved)."""
+        return self._fixed().rlp()
+
+    def rlp_bound(self) -> Interval:
+        """``Phi v*``: RLP's upper bound on ``V*`` per state, as a certified interval."""
+        lo, hi = self.rlp_values()
+        return self.partition.lift(lo), self.partition.lift(hi)
+
+    def exact(self, rows: Any) -> Interval:
+        """The fixed point of any Bellman row system (``max`` over its rows) as a certified
+        interval: e.g. ``trial.exact(IB(trial.mdp, trial.partition, 2).rows)``."""
+        return exact_interval(rows, self.exact_method)
+
+    # ------------------------------------------------------------------ LP side
+    def solve(self, formulation: Any) -> Solved:
+        """Solve ``formulation`` with the trial's solver; its certified bracket.
+
+        The solve is counted in :attr:`tally` (the record's ``solves``, ``solve_seconds``,
+        ``lp_status``, ``solver_status``). A solve that returns no point gives the bracket
+        ``(-inf, inf)``, so comparisons made with it are *inconclusive*, never *violated*.
+        The bracket is :func:`~lpbounds.certification.checks.lp_bracket`'s: on the exact
+        optimum of an LP of Bellman rows (ELP, RLP, SLP, IB, UBLP, LBLP).
+
+        Raises
+        ------
+        ValidationError
+            On a solver-free trial (``solver`` is None).
+        """
+        if self.solver is None:
+            raise ValidationError(
+                "Trial.solve: this claim was declared solver-free (uses_solver=False)"
+            )
+        res, msg = try_solve(formulation, self.solver)
+        self.tally.add(res)
+        if res is None:
+            size = int(formulation.A.shape[1])
+            inf = np.full(size, np.inf)
+            return Solved(None, Bracket(-inf, inf, np.full(size, np.nan), float("inf")), msg)
+        return Solved(res, lp_bracket(formulation, res), "")
+
+    # ------------------------------------------------------------------ verdicts
+    def equal(self, a: Any, b: Any, accuracy: float | None = None) -> Comparison:
+        """The claim ``a = b`` entry by entry, from certified intervals (``(lo, hi)`` pairs,
+        or arrays for exact points): :func:`~lpbounds.certification.checks.compare_equal`
+        at :attr:`accuracy` (or ``accuracy``)."""
+        (alo, ahi), (blo, bhi) = _as_interval(a), _as_interval(b)
+        return compare_equal(alo, ahi, blo, bhi, self.accuracy if accuracy is None else accuracy)
+
+    def at_least(self, a: Any, b: Any, accuracy: float | None = None) -> Comparison:
+        """The claim ``a >= b`` entry by entry, from certified intervals:
+        :func:`~lpbounds.certification.checks.compare_at_least`."""
+        (alo, ahi), (blo, bhi) = _as_interval(a), _as_interval(b)
+        acc = self.accuracy if accuracy is None else accuracy
+        return compare_at_least(alo, ahi, blo, bhi, acc)
+
+
+# ---------------------------------------------------------------------- the claims
+@dataclass(frozen=True)
+class BuiltinClaim:
+    """One of the paper's results as :func:`~lpbounds.studies.verify.verify_instance`
+    checks it: ``check`` is ``"Lemma 1"``, ``"Theorem 1"``, ``"Lemma 2"`` or ``"Theorem 2"``
+    (:data:`~lpbounds.studies.verify.INSTANCE_CHECKS`), or ``"Remark 2"`` (an existence
+    claim: run once per campaign, not per instance)."""
+
+    check: str
+
+    @property
+    def name(self) -> str:
+        """The check's name."""
+        return self.check
+
+
+Predicate = Callable[[Trial], Any]
+
+
+@dataclass(frozen=True)
+class Conjecture:
+    """A claim of your own: a predicate over a :class:`Trial`.
+
+    Parameters
+    ----------
+    name : str
+        The record's ``check`` (e.g. ``"RLP bound = V*"``).
+    predicate : callable(Trial) -> Comparison, Verdict, str or bool
+        See the module docstring for what it may return.
+    description : str
+        The record's ``claim`` (default: the name).
+    uses_solver : bool
+        True (default): the predicate is called once per solver of the campaign
+        (``trial.solver``); False: once per instance, with ``trial.solver`` None (records
+        with solver "exact").
+    """
+
+    name: str
+    predicate: Predicate
+    description: str = ""
+    uses_solver: bool = True
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise ValidationError(f"conjecture name must be a non-empty string; got {self.name!r}")
+        if not callable(self.predicate):
+            raise ValidationError(
+                f"conjecture {self.name!r}: predicate must be callable; got {self.predicate!r}"
+            )
+
+
+Claim = BuiltinClaim | Conjecture
+
+#: The built-in claims by name, in the order of :data:`INSTANCE_CHECKS`, then Remark 2.
+BUILTIN_CLAIMS: dict[str, BuiltinClaim] = {c: BuiltinClaim(c) for c in (*INSTANCE_CHECKS, REMARK2)}
+
+
+def _key(text: str) -> str:
+    return re.sub(r"[\s_\-]+", "", text.lower())
+
+
+def claim_names(claims: Iterable[Claim]) -> list[str]:
+    """The names of ``claims`` (a check's, or a conjecture's ``name``), in order."""
+    return [c.name for c in claims]
+
+
+def load_claim(spec: str) -> Claim:
+    """A claim named on a command line: a built-in claim's name, or ``FILE.py:NAME`` /
+    ``package.module:NAME`` naming a :class:`Conjecture` or a predicate in a file or an
+    importable module (a predicate becomes a Conjecture called ``NAME``).
+
+    A file's module is registered with cloudpickle (when installed) to be pickled by
+    value, so that its conjectures also run on Dask workers that cannot import it.
+
+    Raises
+    ------
+    ValidationError
+        An unknown claim name, a missing file or module, or no such ``NAME`` in it.
+    """
+    if ":" not in spec:
+        return resolve_claims([spec])[0]
+    where, _, name = spec.rpartition(":")
+    module = _load_module(where, spec)
+    obj = getattr(module, name, None)
+    if obj is None:
+        raise ValidationError(f"claims: {spec!r}: {where!r} defines no {name!r}")
+    if isinstance(obj, BuiltinClaim | Conjecture):
+        return obj
+    if callable(obj):
+        return Conjecture(name, obj)
+    raise ValidationError(f"claims: {spec!r} is neither a Conjecture nor a callable")
+
+
+def _load_module(where: str, spec: str) -> Any:
+    import importlib
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    if not where.endswith(".py"):
+        try:
+            return importlib.import_module(where)
+        except ImportError as exc:
+            raise ValidationError(f"claims: {spec!r}: cannot import {where!r} ({exc})") from None
+    path = Path(where)
+    if not path.is_file():
+        raise ValidationError(f"claims: {spec!r}: no file {where!r}")
+    mod_name = "lpbounds_claims_" + re.sub(r"\W", "_", str(path.resolve()))
+    loader = importlib.util.spec_from_file_location(mod_name, path)
+    assert loader is not None and loader.loader is not None
+    module = importlib.util.module_from_spec(loader)
+    sys.modules[mod_name] = module
+    try:
+        loader.loader.exec_module(module)
+    except Exception as exc:  # the user's file: its error, named, as bad input
+        del sys.modules[mod_name]
+        raise ValidationError(
+            f"claims: {spec!r}: running {where!r} raised {type(exc).__name__}: {exc}"
+        ) from exc
+    try:
+        import cloudpickle
+
+        cloudpickle.register_pickle_by_value(module)
+    except (ImportError, ValueError):  # without cloudpickle: local runs need no pickling
+        pass
+    return module
+
+
+def resolve_claims(claims: Iterable[str | Claim | Predicate] | None) -> list[Claim]:
+    """Claims from names, claims and bare predicates (default: every built-in claim).
+
+    A name is a built-in check, written as the paper does or without spaces and case
+    (``"Theorem 1"``, ``"theorem1"``, ``"lemma-2"``); a bare callable becomes a
+    :class:`Conjecture` named after the function.
+
+    Raises
+    ------
+    ValidationError
+        An unknown name (the message lists the known ones), two claims of one name, or an
+        empty list.
+    """
+    if claims is None:
+        return list(BUILTIN_CLAIMS.values())
+    by_key = {_key(k): v for k, v in BUILTIN_CLAIMS.items()}
+    out: list[Claim] = []
+    for item in claims:
+        if isinstance(item, BuiltinClaim | Conjecture):
+            out.append(item)
+        elif isinstance(item, str):
+            found = by_key.get(_key(item))
+            if found is None:
+                raise ValidationError(
+                    f"claims: unknown claim {item!r}; built in: {', '.join(BUILTIN_CLAIMS)} "
+                    "(or give a Conjecture)"
+                )
+            out.append(found)
+        elif callable(item):
+            out.append(Conjecture(getattr(item, "__name__", "conjecture"), item))
+        else:
+            raise ValidationError(f"claims: {item!r} is neither a claim name nor a Conjecture")
+    names = claim_names(out)
+    dup = next((n for n in names if names.count(n) > 1), None)
+    if dup is not None:
+        raise ValidationError(f"claims: {dup!r} is given twice")
+    if not out:
+        raise ValidationError("claims: no claim to check")
+    return out
+
+
+# ---------------------------------------------------------------------- running them
+def _verdict_of(outcome: Any, name: str, accuracy: float) -> tuple[Comparison, str]:
+    """A predicate's outcome as a Comparison and a detail string."""
+    detail = ""
+    if isinstance(outcome, tuple) and len(outcome) == 2 and isinstance(outcome[1], str):
+        outcome, detail = outcome
+    if isinstance(outcome, Comparison):
+        return outcome, detail
+    if isinstance(outcome, bool | np.bool_):
+        verdict = Verdict.HOLDS if bool(outcome) else Verdict.VIOLATED
+    elif isinstance(outcome, Verdict):
+        verdict = outcome
+    elif isinstance(outcome, str) and outcome in {v.value for v in Verdict}:
+        verdict = Verdict(outcome)
+    else:
+        raise ValidationError(
+            f"conjecture {name!r} returned {outcome!r}; return a Comparison (Trial.equal, "
+            "Trial.at_least), a Verdict, 'holds'/'violated'/'inconclusive' or a bool"
+        )
+    nan = float("nan")
+    return Comparison(verdict, nan, nan, accuracy, 0, (nan, nan), (nan, nan)), detail
+
+
+def _conjecture_record(conj: Conjecture, trial: Trial) -> Record:
+    """Call the predicate on one trial; its record (an exception: *inconclusive*, ``error``)."""
+    error = ""
+    try:
+        outcome = conj.predicate(trial)
+    except Exception as exc:  # a crash of the predicate (or of what it calls) is a finding
+        error = f"{type(exc).__name__}: {exc}"
+        outcome = (Verdict.INCONCLUSIVE, f"the predicate raised {error}")
+    cmp, detail = _verdict_of(outcome, conj.name, trial.accuracy)
+    record = make_record(
+        conj.name,
+        conj.description or conj.name,
+        trial.instance.name,
+        trial.solver or "exact",
+        cmp,
+        detail,
+        trial.tally,
+    )
+    return {**record, "error": error}
+
+
+def run_claims(
+    inst: VerifyInstance,
+    claims: Sequence[Claim],
+    solvers: Sequence[str],
+    *,
+    n_costs: int = 3,
+    seed: int = 0,
+    rtol: float = LP_COMPARE_RTOL,
+    exact_method: str = "mpi",
+) -> list[Record]:
+    """Every claim of ``claims`` on one instance, for each solver: the records.
+
+    The built-in checks run together in one :func:`~lpbounds.studies.verify.verify_instance`
+    call (they share the exact fixed points and the RLP solves), then each conjecture for
+    each solver (once, solver "exact", when it does not use one). Remark 2 is not checked
+    here (it does not depend on the instance; see :func:`run_remark2`). Every record has an
+    ``error`` key ("" unless a predicate raised).
+
+    Parameters
+    ----------
+    inst : VerifyInstance
+    claims : sequence of BuiltinClaim or Conjecture
+    solvers : sequence of str
+    n_costs, seed, rtol, exact_method
+        As for :func:`~lpbounds.studies.verify.verify_instance` (``seed`` seeds its costs;
+        ``exact_method`` also serves the conjectures' :class:`Trial`).
+
+    Returns
+    -------
+    list of dict
+    """
+    checks = [c.check for c in claims if isinstance(c, BuiltinClaim) and c.check != REMARK2]
+    records: list[Record] = []
+    if checks:
+        found = verify_instance(
+            inst,
+            solvers,
+            n_costs=n_costs,
+            seed=seed,
+            rtol=rtol,
+            checks=checks,
+            exact_method=exact_method,
+        )
+        records += [{**r, "error": ""} for r in found]
+    exact = _Exact(inst, exact_method)
+    for conj in (c for c in claims if isinstance(c, Conjecture)):
+        for solver in list(solvers) if conj.uses_solver else [None]:
+            trial = Trial(inst, solver, rtol, exact_method=exact_method, _exact=exact)
+            records.append(_conjecture_record(conj, trial))
+    return records
+
+
+def run_remark2(
+    claims: Sequence[Claim], solvers: Sequence[str], *, seed: int = 0, rtol: float = LP_COMPARE_RTOL
+) -> list[Record]:
+    """Remark 2's records (:func:`~lpbounds.studies.verify.verify_remark2`) when ``claims``
+    has it, else none."""
+    if not any(isinstance(c, BuiltinClaim) and c.check == REMARK2 for c in claims):
+        return []
+    return [{**r, "error": ""} for r in verify_remark2(solvers, seed=seed, rtol=rtol)]
