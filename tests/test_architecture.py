@@ -258,9 +258,7 @@ def test_private_scan_finds_private_access(tmp_path):
     """The scan above could fail: it sees an imported private name and a private attribute."""
     bad = tmp_path / "bad.py"
     bad.write_text(
-        "from lpbounds.model.mdp import _private\n"
-        "def f(rows):\n"
-        "    return rows._vec(1)\n"
+        "from lpbounds.model.mdp import _private\ndef f(rows):\n    return rows._vec(1)\n"
     )
     assert len(_private_uses("lpbounds.bad", bad)) == 2
 

@@ -643,9 +643,7 @@ class FiniteMDP:
         Gymnasium itself is never imported. See
         :func:`lpbounds.model.gymnasium.from_gymnasium` for ``sink=`` and the checks.
         """
-        return gym_interop.from_gymnasium(
-            cls, env, discount, sink=sink, action_names=action_names
-        )
+        return gym_interop.from_gymnasium(cls, env, discount, sink=sink, action_names=action_names)
 
     def to_quantecon(self, form: str = "sa") -> Any:
         """This model as a ``quantecon.markov.DiscreteDP`` (needs QuantEcon installed).

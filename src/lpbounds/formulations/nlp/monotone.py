@@ -301,9 +301,7 @@ def _solve_master(
         return np.asarray(res.x[:m], dtype=np.float64)
     sol = highs_solve(lp)
     if sol.status is not Status.OPTIMAL:
-        raise SolverError(
-            f"NLP monotone master (highspy): status {sol.model_status or sol.status}"
-        )
+        raise SolverError(f"NLP monotone master (highspy): status {sol.model_status or sol.status}")
     return sol.x[:m]
 
 
