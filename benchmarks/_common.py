@@ -22,6 +22,31 @@ that does only the measured work. Timings are never asserted in tests.
 """
 
 
+#: Source text for a benchmark's child process (after ``import time, numpy as np`` and
+#: ``from numba import njit, prange``): ``read_sum`` and ``copy``, numba loops that measure
+#: this machine's read and copy bandwidth, and ``best(f, reps)``, the minimum and median
+#: seconds of ``reps`` calls.
+BANDWIDTH_PROBE = r"""
+@njit(parallel=True, fastmath=True)  # fastmath: a vectorised sum, bound by memory, not adds
+def read_sum(a):
+    s = 0.0
+    for i in prange(a.shape[0]):
+        s += a[i]
+    return s
+
+@njit(parallel=True)
+def copy(a, b):
+    for i in prange(a.shape[0]):
+        b[i] = a[i]
+
+def best(f, reps):
+    ts = []
+    for _ in range(reps):
+        t = time.perf_counter(); f(); ts.append(time.perf_counter() - t)
+    return min(ts), float(np.median(ts))
+"""
+
+
 def machine() -> str:
     """One line describing this machine, Python and the key libraries."""
     cpu = "unknown CPU"

@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from _common import machine, run_isolated, today, write_section
+from _common import BANDWIDTH_PROBE, machine, run_isolated, today, write_section
 
 BUILD = """
 import time, json, lpbounds as lb
@@ -51,23 +51,7 @@ import lpbounds as lb
 from lpbounds.dp import post_decision_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
 
-@njit(parallel=True, fastmath=True)  # fastmath: a vectorised sum, bound by memory, not adds
-def read_sum(a):
-    s = 0.0
-    for i in prange(a.shape[0]):
-        s += a[i]
-    return s
-
-@njit(parallel=True)
-def copy(a, b):
-    for i in prange(a.shape[0]):
-        b[i] = a[i]
-
-def best(f, reps):
-    ts = []
-    for _ in range(reps):
-        t = time.perf_counter(); f(); ts.append(time.perf_counter() - t)
-    return min(ts), float(np.median(ts))
+__PROBE__
 
 many = numba.get_num_threads()
 a = np.random.default_rng(0).random(64 * 2**20 // 8 * 8)  # 512 MB
@@ -118,7 +102,7 @@ for name, fix in (("choice", None), ("one", 1), ("all", many)):
 print(json.dumps({"bw": bw, "imp_bytes": imp, "pol_bytes": pol, "times": times, "n": n,
                   "n_post": ps.n_post, "solves": solves, "many": many,
                   "load": os.getloadavg()}))
-"""
+""".replace("__PROBE__", BANDWIDTH_PROBE)
 
 
 def floor() -> None:

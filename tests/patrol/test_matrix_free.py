@@ -10,13 +10,10 @@ import pytest
 from lpbounds import evaluate_policy, greedy_policy, solve_exact
 from lpbounds._kernels.dispatch import SMALL_READS
 from lpbounds.errors import ValidationError
+from lpbounds.patrol import sweeps
 from lpbounds.patrol.greedy_mc import partition_bounds
 from lpbounds.patrol.instance import params_from_instance
-from lpbounds.patrol.matrix_free import (
-    MatrixFreePatrol,
-    _decode_range_kernel,
-    solve_vstar,
-)
+from lpbounds.patrol.matrix_free import MatrixFreePatrol, solve_vstar
 from lpbounds.patrol.matrix_free import evaluate_policy as mf_evaluate
 from lpbounds.patrol.model import PatrolModel
 from lpbounds.patrol.params import PatrolParams
@@ -98,7 +95,7 @@ def test_partitions_components_and_reward_scale_at_every_state(case):
     _, _, pm, mdp, mf = case
     assert np.array_equal(mf.labels(), pm.partition().labels)
     comps = np.empty((mf.n_vars, 3 + pm.m), dtype=np.int64)
-    _decode_range_kernel(mf._geo, mf._stations, 0, comps, mf.nchunks(), mf._block)
+    sweeps.decode_range(*mf.geometry[:4], 0, comps, mf.nchunks())
     assert np.array_equal(comps, pm.state_components(np.int64))
     assert mf.reward_absmax == float(np.abs(mdp.rewards).max())
 

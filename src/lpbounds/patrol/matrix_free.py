@@ -3,16 +3,18 @@ r"""Matrix-free exact DP for the patrol model: sweeps that compute the dynamics 
 The array path (:meth:`PatrolModel.mdp` and :class:`lpbounds.rows.PostDecisionRows`)
 stores ``(m + 1)`` successors per state and action; at 6 stations (534,773,760 states)
 those arrays alone would take about 32 GB. The sweeps here store nothing per state but
-the value vectors: each state's components, its successors, its rewards and (for the
-bounds) its partition are computed from the state index inside compiled kernels, a block
-of states at a time, with the model's own encoding and dynamics
-(``model.decode_kernel``, ``model.successor_kernel``) and partitions
-(:func:`lpbounds.patrol.partitions.state_partition_kernel`). A block is decoded by rows of
-``Gamma + 1`` consecutive states, which differ in one delay only (:func:`_decode_rows`).
+the value vectors: the successors, rewards and (for the bounds) partitions are computed
+inside compiled kernels (:mod:`lpbounds.patrol.sweeps`) that walk the states in index
+order. The encoding is mixed radix, so the ``Gamma + 1`` consecutive states of a *row*
+differ in one delay and their successors are arithmetic sequences of indices; a row's
+successors are set up from the previous row's delays (a counter, carried), no state
+index is decoded but a work chunk's first, and the two travel states at one node with
+the same delays (headings +1 and -1) share their successors, so one row of sums serves
+both.
 
-Speed: a sweep costs 100-200 ns of one core per state (measured on the paper's instance,
-2-core machine, idle to loaded), so at 6 stations about a minute per sweep on two idle
-cores; ``benchmarks/bench_beyond.py`` records it.
+Speed: ``benchmarks/bench_beyond.py --in-order`` measures a sweep against the array
+path's on the paper's instance and records it in ``docs/benchmarks.md`` ("Matrix-free
+sweeps in state order").
 
 Same numbers as the array path
 ------------------------------
@@ -46,7 +48,6 @@ from collections.abc import Callable
 from typing import Any, Literal
 
 import numpy as np
-from numba import njit, prange
 
 from ..dp import DPResult, PolicyEvaluation, check_eval_sweeps, evaluation_loop, mpi_loop
 from ..errors import ConvergenceError, ValidationError
@@ -54,551 +55,16 @@ from ..rows import PolicySweeps
 from ..stochastic import RowSums, row_sums
 from ..tolerances import GREEDY_TIE_RTOL, dp_default_tol, error_bound
 from ..validation import check_int
-from .model import PatrolModel, decode_kernel, successor_kernel
+from . import sweeps as sw
+from .model import PatrolModel
 from .params import PatrolParams
-from .partitions import block_sizes, state_partition_kernel
 
 __all__ = [
-    "BLOCK",
     "MatrixFreePatrol",
     "check_finite",
     "evaluate_policy",
     "solve_vstar",
 ]
-
-_OPTS: dict[str, Any] = {"cache": True, "nogil": True, "fastmath": False}
-
-#: States decoded together into a thread's buffers (small enough to stay in L1/L2).
-BLOCK: int = 512
-
-# indices into the integer geometry vector the kernels take
-_N, _M, _D, _G, _RADIX, _NTRAVEL, _EMPTY, _TBS, _LBS, _ROW = range(10)
-
-
-# ---------------------------------------------------------------------- kernels
-@njit(**_OPTS)
-def _buffers(block, m):  # pragma: no cover - compiled
-    """One thread's block buffers: decoded components ``l, w, d, tau``, the state indices
-    ``xs``, their compacted copies ``cl, cw, cd, ctau`` and index list ``sel``, and one
-    successor block per action."""
-    ints = np.empty((8, block), np.int64)
-    tau = np.empty((block, m), np.int16)
-    ctau = np.empty((block, m), np.int16)
-    succ = np.empty((3, block, m + 1), np.int64)
-    return ints, tau, ctau, succ
-
-
-@njit(**_OPTS)
-def _decode_rows(start, nb, geo, stations, ints, tau, ctau):  # pragma: no cover - compiled
-    """Decode states ``start .. start + nb - 1`` into buffer rows ``0 .. nb - 1``.
-
-    The encoding is mixed radix with a delay as its last digit (:mod:`.model`), so the
-    ``Gamma + 1`` consecutive states of a *row* (``start`` and ``nb`` are multiples of the
-    row length ``geo[_ROW]``) share every component but that delay, which runs 0, 1, ...
-    along the row. ``model.decode_kernel`` decodes the first two states of each row
-    (where they differ is the delay that runs) and the rest of the row is copied: 8-15
-    times fewer integer divisions than decoding every state. Uses ``ints[0]`` and
-    ``ints[5:8]``, ``ctau`` as scratch.
-    """
-    xs, l, w, d = ints[0], ints[1], ints[2], ints[3]
-    big_r = geo[_ROW]
-    m = geo[_M]
-    if big_r == 1:
-        for i in range(nb):
-            xs[i] = start + i
-        decode_kernel(
-            xs[:nb],
-            geo[_NTRAVEL],
-            geo[_RADIX],
-            m,
-            geo[_D],
-            stations,
-            l[:nb],
-            w[:nb],
-            d[:nb],
-            tau[:nb],
-        )
-        return
-    n2 = 2 * (nb // big_r)
-    for q in range(n2):  # the first two states of each row
-        xs[q] = start + (q // 2) * big_r + q % 2
-    l2, w2, d2 = ints[5], ints[6], ints[7]
-    decode_kernel(
-        xs[:n2],
-        geo[_NTRAVEL],
-        geo[_RADIX],
-        m,
-        geo[_D],
-        stations,
-        l2[:n2],
-        w2[:n2],
-        d2[:n2],
-        ctau[:n2],
-    )
-    for r in range(n2 // 2):
-        a = 2 * r
-        last = 0
-        for j in range(m):
-            if ctau[a, j] != ctau[a + 1, j]:
-                last = j
-        for t in range(big_r):
-            i = r * big_r + t
-            l[i] = l2[a]
-            w[i] = w2[a]
-            d[i] = d2[a]
-            for j in range(m):
-                tau[i, j] = ctau[a, j]
-            tau[i, last] = t
-
-
-@njit(**_OPTS)
-def _successors(geo, sp, wt, wl, ints, tau, nb, action, out):  # pragma: no cover
-    """``model.successor_kernel`` on buffer rows ``0 .. nb - 1`` into ``out[:nb]``."""
-    successor_kernel(
-        ints[1][:nb],
-        ints[2][:nb],
-        ints[3][:nb],
-        tau[:nb],
-        action,
-        geo[_N],
-        geo[_D],
-        geo[_G],
-        geo[_RADIX],
-        geo[_NTRAVEL],
-        sp,
-        wt,
-        wl,
-        out[:nb],
-    )
-
-
-@njit(**_OPTS)
-def _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, action, out):  # pragma: no cover
-    """``model.successor_kernel`` on the ``ns`` buffer rows listed in ``ints[4]`` (copied
-    together first: the kernel takes arrays) into ``out[:ns]``."""
-    sel, cl, cw, cd = ints[4], ints[5], ints[6], ints[7]
-    l, w, d = ints[1], ints[2], ints[3]
-    for q in range(ns):
-        i = sel[q]
-        cl[q] = l[i]
-        cw[q] = w[i]
-        cd[q] = d[i]
-        for j in range(tau.shape[1]):
-            ctau[q, j] = tau[i, j]
-    successor_kernel(
-        cl[:ns],
-        cw[:ns],
-        cd[:ns],
-        ctau[:ns],
-        action,
-        geo[_N],
-        geo[_D],
-        geo[_G],
-        geo[_RADIX],
-        geo[_NTRAVEL],
-        sp,
-        wt,
-        wl,
-        out[:ns],
-    )
-
-
-@njit(**_OPTS)
-def _loiter_allowed(geo, station_pos, li, di, tau, i):  # pragma: no cover - compiled
-    """:meth:`PatrolModel.allowed`'s loiter column for one decoded state."""
-    k = station_pos[li]
-    if k < 0 or di >= geo[_D]:
-        return False
-    return di >= 1 or tau[i, k] > 0 or geo[_EMPTY] != 0
-
-
-@njit(**_OPTS)
-def _select_loiter(geo, sp, ints, tau, nb):  # pragma: no cover - compiled
-    """List the buffer rows where loitering is allowed in ``ints[4]``; return how many."""
-    sel, l, d = ints[4], ints[1], ints[3]
-    ns = 0
-    for i in range(nb):
-        if _loiter_allowed(geo, sp, l[i], d[i], tau, i):
-            sel[ns] = i
-            ns += 1
-    return ns
-
-
-@njit(**_OPTS)
-def _select_action(act, b0, nb, action, ints):  # pragma: no cover - compiled
-    """List the buffer rows whose state has ``act[x] == action`` in ``ints[4]``."""
-    sel = ints[4]
-    ns = 0
-    for i in range(nb):
-        if act[b0 + i] == action:
-            sel[ns] = i
-            ns += 1
-    return ns
-
-
-@njit(inline="always", **_OPTS)
-def _expect(succ, i, probs, v):  # pragma: no cover - compiled
-    """``sum_l probs[l] v[succ[i, l]]`` in the array path's order (from 0.0)."""
-    acc = 0.0
-    for ll in range(probs.size):
-        acc += probs[ll] * v[succ[i, ll]]
-    return acc
-
-
-@njit(inline="always", **_OPTS)
-def _expect_lifted(succ, i, probs, labels, w):  # pragma: no cover - compiled
-    """``sum_l probs[l] w[labels[succ[i, l]]]``: the expectation of a lifted partition vector."""
-    acc = 0.0
-    for ll in range(probs.size):
-        acc += probs[ll] * w[labels[succ[i, ll]]]
-    return acc
-
-
-@njit(inline="always", **_OPTS)
-def _penalty(rho, gamma, tau, i):  # pragma: no cover - compiled
-    """``-rho min(taubar, Gamma)``, the float :meth:`PatrolModel.rewards` computes."""
-    tb = 0
-    for j in range(tau.shape[1]):
-        if tau[i, j] > tb:
-            tb = tau[i, j]
-    return -rho * np.float64(min(tb, gamma))
-
-
-@njit(inline="always", **_OPTS)
-def _partition_of(geo, station_pos, ints, tau, i):  # pragma: no cover - compiled
-    """The partition of buffer row ``i`` (:func:`.partitions.state_partition_kernel`)."""
-    return state_partition_kernel(
-        ints[1][i],
-        ints[2][i],
-        ints[3][i],
-        tau[i],
-        station_pos,
-        geo[_N],
-        geo[_D],
-        geo[_G],
-        geo[_TBS],
-        geo[_LBS],
-    )
-
-
-@njit(**_OPTS)
-def _chunk(n, nchunks, big_r, c):  # pragma: no cover - compiled
-    """States ``[start, end)`` of chunk ``c``: consecutive, starting at a row boundary."""
-    size = (n + nchunks - 1) // nchunks
-    size = (size + big_r - 1) // big_r * big_r
-    return min(n, c * size), min(n, (c + 1) * size)
-
-
-@njit(parallel=True, **_OPTS)
-def _sweep_max_kernel(
-    geo, stations, sp, wt, wl, probs, inc, rho, lam, v, out, arg, nchunks, block
-):  # pragma: no cover - compiled
-    """``out = T v`` (first maximising action in ``arg``); returns min, max of ``out - v``."""
-    n = v.size
-    lo_c = np.full(nchunks, np.inf)
-    hi_c = np.full(nchunks, -np.inf)
-    for c in prange(nchunks):
-        ints, tau, ctau, s = _buffers(block, geo[_M])
-        sel = ints[4]
-        lc, hc = np.inf, -np.inf
-        start, end = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(start, end, block):
-            nb = min(block, end - b0)
-            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
-            _successors(geo, sp, wt, wl, ints, tau, nb, 0, s[0])
-            _successors(geo, sp, wt, wl, ints, tau, nb, 1, s[1])
-            ns = _select_loiter(geo, sp, ints, tau, nb)
-            _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, 2, s[2])
-            p = 0
-            for i in range(nb):
-                pen = _penalty(rho, geo[_G], tau, i)
-                best = pen + lam * _expect(s[0], i, probs, v)
-                best_a = 0
-                q = pen + lam * _expect(s[1], i, probs, v)
-                if q > best:
-                    best, best_a = q, 1
-                if p < ns and sel[p] == i:
-                    q = (pen + inc[ints[3][i]]) + lam * _expect(s[2], p, probs, v)
-                    p += 1
-                    if q > best:
-                        best, best_a = q, 2
-                x = b0 + i
-                out[x] = best
-                arg[x] = best_a
-                diff = best - v[x]
-                lc = min(lc, diff)
-                hc = max(hc, diff)
-        lo_c[c] = lc
-        hi_c[c] = hc
-    return lo_c.min(), hi_c.max()
-
-
-@njit(parallel=True, **_OPTS)
-def _sweep_policy_kernel(
-    geo, stations, sp, wt, wl, probs, inc, rho, lam, act, v, out, nchunks, block
-):  # pragma: no cover - compiled
-    """``out = T_pi v`` for the actions ``act``; returns min, max of ``out - v``."""
-    n = v.size
-    lo_c = np.full(nchunks, np.inf)
-    hi_c = np.full(nchunks, -np.inf)
-    for c in prange(nchunks):
-        ints, tau, ctau, s = _buffers(block, geo[_M])
-        sel, d = ints[4], ints[3]
-        lc, hc = np.inf, -np.inf
-        start, end = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(start, end, block):
-            nb = min(block, end - b0)
-            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
-            for a in range(3):
-                ns = _select_action(act, b0, nb, a, ints)
-                _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, a, s[a])
-                for p in range(ns):
-                    i = sel[p]
-                    r = _penalty(rho, geo[_G], tau, i)
-                    if a == 2:
-                        r = r + inc[d[i]]
-                    q = r + lam * _expect(s[a], p, probs, v)
-                    x = b0 + i
-                    out[x] = q
-                    diff = q - v[x]
-                    lc = min(lc, diff)
-                    hc = max(hc, diff)
-        lo_c[c] = lc
-        hi_c[c] = hc
-    return lo_c.min(), hi_c.max()
-
-
-@njit(parallel=True, **_OPTS)
-def _check_policy_kernel(geo, stations, sp, act, nchunks, block):  # pragma: no cover
-    """First state whose action ``act[x]`` is a forbidden loiter, or -1 (``act`` is known
-    to hold 0, 1 or 2)."""
-    n = act.size
-    first = np.full(nchunks, -1, np.int64)
-    for c in prange(nchunks):
-        ints, tau, ctau, _ = _buffers(block, geo[_M])
-        start, end = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(start, end, block):
-            if first[c] >= 0:
-                break
-            nb = min(block, end - b0)
-            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
-            for i in range(nb):
-                if act[b0 + i] == 2 and not _loiter_allowed(
-                    geo, sp, ints[1][i], ints[3][i], tau, i
-                ):
-                    first[c] = b0 + i
-                    break
-    for c in range(nchunks):
-        if first[c] >= 0:
-            return first[c]
-    return -1
-
-
-@njit(parallel=True, **_OPTS)
-def _reward_absmax_kernel(geo, stations, sp, inc, rho, n, nchunks, block):  # pragma: no cover
-    """``max |R_u(x)|`` over the allowed pairs (the scale of the default tolerance)."""
-    best = np.zeros(nchunks)
-    for c in prange(nchunks):
-        ints, tau, ctau, _ = _buffers(block, geo[_M])
-        bc = 0.0
-        start, end = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(start, end, block):
-            nb = min(block, end - b0)
-            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
-            for i in range(nb):
-                pen = _penalty(rho, geo[_G], tau, i)
-                bc = max(bc, abs(pen))
-                if _loiter_allowed(geo, sp, ints[1][i], ints[3][i], tau, i):
-                    bc = max(bc, abs(pen + inc[ints[3][i]]))
-        best[c] = bc
-    return best.max()
-
-
-@njit(parallel=True, **_OPTS)
-def _labels_kernel(geo, stations, sp, labels, nchunks, block):  # pragma: no cover - compiled
-    """``labels[x]``: the partition of every state (Section 4.2)."""
-    n = labels.size
-    for c in prange(nchunks):
-        ints, tau, ctau, _ = _buffers(block, geo[_M])
-        start, end = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(start, end, block):
-            nb = min(block, end - b0)
-            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
-            for i in range(nb):
-                labels[b0 + i] = _partition_of(geo, sp, ints, tau, i)
-
-
-@njit(parallel=True, **_OPTS)
-def _decode_range_kernel(geo, stations, start, comps, nchunks, block):  # pragma: no cover
-    """Components ``(l, w, d, tau)`` of states ``start ..`` as the sweeps decode them (the
-    row decoding, for tests). ``start`` and ``len(comps)`` are multiples of the row."""
-    n = comps.shape[0]
-    m = geo[_M]
-    for c in prange(nchunks):
-        ints, tau, ctau, _ = _buffers(block, m)
-        lo, hi = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(lo, hi, block):
-            nb = min(block, hi - b0)
-            _decode_rows(start + b0, nb, geo, stations, ints, tau, ctau)
-            for i in range(nb):
-                comps[b0 + i, 0] = ints[1][i]
-                comps[b0 + i, 1] = ints[2][i]
-                comps[b0 + i, 2] = ints[3][i]
-                for j in range(m):
-                    comps[b0 + i, 3 + j] = tau[i, j]
-
-
-# columns of the per-chunk statistics of the greedy pass
-_F_UP_SUM, _F_UP_MAX, _F_UP_MIN, _F_LOW_SUM, _F_LOW_MAX, _F_LOW_MIN = range(6)
-_F_GAP_SUM, _F_GAP_MAX, _F_LOSS_MAX = range(6, 9)
-_I_UP_ARGMIN, _I_LOW_ARGMIN, _I_OPTIMAL, _I_DIFFERS, _I_SUBOPT = range(5)
-
-
-@njit(**_OPTS)
-def _greedy_state(i, p, ns, sel, s, probs, inc, d, pen, lam, v, labels, w_low, tie, qv, qw):
-    # pragma: no cover - compiled
-    """Q-values of ``v`` and of the lifted ``w_low`` at buffer row ``i`` (``qv``, ``qw``);
-    returns the number of actions (3 when row ``i`` is the loiter list's entry ``p``)."""
-    n_act = 3 if (p < ns and sel[p] == i) else 2
-    for a in range(n_act):
-        r = pen + inc[d[i]] if a == 2 else pen
-        row = p if a == 2 else i
-        qv[a] = r + lam * _expect(s[a], row, probs, v)
-        qw[a] = r + lam * _expect_lifted(s[a], row, probs, labels, w_low)
-    return n_act
-
-
-@njit(parallel=True, **_OPTS)
-def _greedy_gap_kernel(
-    geo,
-    stations,
-    sp,
-    wt,
-    wl,
-    probs,
-    inc,
-    rho,
-    lam,
-    v,
-    labels,
-    w_low,
-    v_up,
-    pistar,
-    tie_rtol,
-    loss_tol,
-    pi_s,
-    fstats,
-    istats,
-    nchunks,
-    block,
-):  # pragma: no cover - compiled
-    """One pass: ``pi_s`` greedy w.r.t. the lifted ``w_low`` (lowest action among those tied
-    within ``tie_rtol``, as :func:`lpbounds.greedy_policy`), whether it is among ``v``'s
-    optimal actions (tied within ``tie_rtol``), its one-step loss, and the gaps
-    ``v_up - v``, ``v - w_low``, ``v_up - w_low`` at every state."""
-    n = v.size
-    for c in prange(nchunks):
-        ints, tau, ctau, s = _buffers(block, geo[_M])
-        sel, d = ints[4], ints[3]
-        qv = np.empty(3)
-        qw = np.empty(3)
-        f = fstats[c]
-        f[:] = 0.0
-        for col in (_F_UP_MIN, _F_LOW_MIN):
-            f[col] = np.inf
-        for col in (_F_UP_MAX, _F_LOW_MAX, _F_GAP_MAX, _F_LOSS_MAX):
-            f[col] = -np.inf
-        st = istats[c]
-        st[:] = 0
-        start, end = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(start, end, block):
-            nb = min(block, end - b0)
-            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
-            _successors(geo, sp, wt, wl, ints, tau, nb, 0, s[0])
-            _successors(geo, sp, wt, wl, ints, tau, nb, 1, s[1])
-            ns = _select_loiter(geo, sp, ints, tau, nb)
-            _successors_of(geo, sp, wt, wl, ints, tau, ctau, ns, 2, s[2])
-            p = 0
-            for i in range(nb):
-                x = b0 + i
-                pen = _penalty(rho, geo[_G], tau, i)
-                n_act = _greedy_state(
-                    i, p, ns, sel, s, probs, inc, d, pen, lam, v, labels, w_low, tie_rtol, qv, qw
-                )
-                if n_act == 3:
-                    p += 1
-                best_v = qv[:n_act].max()
-                best_w = qw[:n_act].max()
-                thr_w = best_w - tie_rtol * max(1.0, abs(best_w))
-                a_s = 0
-                while qw[a_s] < thr_w:
-                    a_s += 1
-                pi_s[x] = a_s
-                if qv[a_s] >= best_v - tie_rtol * max(1.0, abs(best_v)):
-                    st[_I_OPTIMAL] += 1
-                loss = best_v - qv[a_s]
-                f[_F_LOSS_MAX] = max(f[_F_LOSS_MAX], loss)
-                if loss > loss_tol:
-                    st[_I_SUBOPT] += 1
-                if a_s != pistar[x]:
-                    st[_I_DIFFERS] += 1
-                k = labels[x]
-                up = v_up[k] - v[x]
-                low = v[x] - w_low[k]
-                f[_F_UP_SUM] += up
-                f[_F_UP_MAX] = max(f[_F_UP_MAX], up)
-                if up < f[_F_UP_MIN]:
-                    f[_F_UP_MIN] = up
-                    st[_I_UP_ARGMIN] = x
-                f[_F_LOW_SUM] += low
-                f[_F_LOW_MAX] = max(f[_F_LOW_MAX], low)
-                if low < f[_F_LOW_MIN]:
-                    f[_F_LOW_MIN] = low
-                    st[_I_LOW_ARGMIN] = x
-                gap = v_up[k] - w_low[k]
-                f[_F_GAP_SUM] += gap
-                f[_F_GAP_MAX] = max(f[_F_GAP_MAX], gap)
-
-
-_S_SUM, _S_MAX, _S_MIN, _S_LOW_MIN = range(4)
-_J_ARGMAX, _J_ARGMIN, _J_LOW_ARGMIN = range(3)
-
-
-@njit(parallel=True, **_OPTS)
-def _vsub_kernel(
-    geo, stations, sp, vstar, vsub, w_low, fstats, istats, nchunks, block
-):  # pragma: no cover - compiled
-    """Statistics of ``vstar - vsub`` (sum, max, min with their states) and the smallest
-    ``vsub - w_low`` (the lifted lower bound) with its state."""
-    n = vstar.size
-    for c in prange(nchunks):
-        ints, tau, ctau, _ = _buffers(block, geo[_M])
-        f = fstats[c]
-        f[_S_SUM] = 0.0
-        f[_S_MAX] = -np.inf
-        f[_S_MIN] = np.inf
-        f[_S_LOW_MIN] = np.inf
-        st = istats[c]
-        st[:] = 0
-        start, end = _chunk(n, nchunks, geo[_ROW], c)
-        for b0 in range(start, end, block):
-            nb = min(block, end - b0)
-            _decode_rows(b0, nb, geo, stations, ints, tau, ctau)
-            for i in range(nb):
-                x = b0 + i
-                diff = vstar[x] - vsub[x]
-                f[_S_SUM] += diff
-                if diff > f[_S_MAX]:
-                    f[_S_MAX] = diff
-                    st[_J_ARGMAX] = x
-                if diff < f[_S_MIN]:
-                    f[_S_MIN] = diff
-                    st[_J_ARGMIN] = x
-                k = _partition_of(geo, sp, ints, tau, i)
-                low = vsub[x] - w_low[k]
-                if low < f[_S_LOW_MIN]:
-                    f[_S_LOW_MIN] = low
-                    st[_J_LOW_ARGMIN] = x
 
 
 # ---------------------------------------------------------------------- the model
@@ -610,11 +76,18 @@ class MatrixFreePatrol:
     params : PatrolParams, optional
         Default: the paper's example.
 
+    Attributes
+    ----------
+    geometry : tuple of ndarray
+        The arrays every kernel of :mod:`lpbounds.patrol.sweeps` takes first
+        (:func:`lpbounds.patrol.sweeps.geometry`: sizes, plane table, station positions,
+        index weights, alert distribution, loiter increments, penalties).
+
     Notes
     -----
     The state encoding, the dynamics and the partitions are those of
-    :class:`~lpbounds.patrol.model.PatrolModel` (whose geometry arrays this class takes);
-    the sweeps run in parallel over chunks of consecutive states (numba ``prange``).
+    :class:`~lpbounds.patrol.model.PatrolModel`; the sweeps run in parallel over chunks
+    of consecutive rows (numba ``prange``).
     """
 
     def __init__(self, params: PatrolParams | None = None) -> None:
@@ -624,33 +97,8 @@ class MatrixFreePatrol:
         self.model = pm
         self.n_vars = int(p.n_states)
         self.discount = float(p.discount)
-        tb_size, lb_size = block_sizes(p)
-        self._geo = np.array(
-            [
-                p.N,
-                p.m,
-                p.D,
-                p.Gamma,
-                pm.radix,
-                pm.n_travel,
-                int(p.allow_empty_loiter),
-                tb_size,
-                lb_size,
-                pm.radix if p.m >= 2 else 1,
-            ],
-            dtype=np.int64,
-        )
-        self._stations = np.ascontiguousarray(pm.stations, dtype=np.int64)
-        self._sp = np.ascontiguousarray(pm.station_pos, dtype=np.int64)
-        self._wt = np.ascontiguousarray(pm.w_travel, dtype=np.int64)
-        self._wl = np.ascontiguousarray(pm.w_loiter, dtype=np.int64)
-        self._probs = np.ascontiguousarray(p.alert_probabilities(), dtype=np.float64)
-        # the loiter reward's increment per dwell d (d = D: loiter not allowed)
-        self._inc = np.append(p.information_increments(), 0.0)
-        self._rho = float(p.rho)
+        self.geometry: tuple[np.ndarray, ...] = sw.geometry(p)
         self._reward_absmax: float | None = None
-        row = int(self._geo[_ROW])
-        self._block = max(1, BLOCK // row) * row  # whole rows
 
     def __repr__(self) -> str:
         return f"MatrixFreePatrol(n_states={self.n_vars:,}, m={self.params.m})"
@@ -682,40 +130,27 @@ class MatrixFreePatrol:
 
         return nchunks()
 
-    def _common(self) -> tuple[Any, ...]:
-        return (
-            self._geo,
-            self._stations,
-            self._sp,
-            self._wt,
-            self._wl,
-            self._probs,
-            self._inc,
-            self._rho,
-            self.discount,
-        )
+    def _walk(self) -> tuple[np.ndarray, ...]:
+        """The kernels' first arguments: the plane geometry (sizes, planes, stations, weights)."""
+        return self.geometry[:4]
+
+    def _dynamics(self) -> tuple[Any, ...]:
+        """The sweeps' first arguments: the geometry, then probabilities, rewards, discount."""
+        return (*self.geometry, self.discount)
 
     @property
     def reward_absmax(self) -> float:
         """``max |R_u(x)|`` over the allowed pairs (one pass over the states, cached)."""
         if self._reward_absmax is None:
+            geo, planes, sp, weights, _, inc, pent = self.geometry
             self._reward_absmax = float(
-                _reward_absmax_kernel(
-                    self._geo,
-                    self._stations,
-                    self._sp,
-                    self._inc,
-                    self._rho,
-                    self.n_vars,
-                    self.nchunks(),
-                    self._block,
-                )
+                sw.reward_absmax_pass(geo, planes, sp, weights, inc, pent, self.nchunks())
             )
         return self._reward_absmax
 
     def row_sums(self) -> RowSums:
         """Certified bounds on the exact sum of the alert distribution ``p_l``."""
-        return row_sums(self._probs)
+        return row_sums(self.geometry[4])
 
     def modulus(self) -> float:
         """The contraction modulus ``lambda sum_l p_l`` (rounded up) of the error bounds."""
@@ -735,7 +170,7 @@ class MatrixFreePatrol:
         return np.zeros(self.n_vars, dtype=np.int8)
 
     def new_work(self) -> None:
-        """No scratch array: the sweeps keep their buffers per thread, a block at a time."""
+        """No scratch array: the sweeps keep a row's buffers per thread."""
         return None
 
     def evaluator(self, work: np.ndarray | None = None) -> PolicySweeps:
@@ -754,7 +189,7 @@ class MatrixFreePatrol:
         """``out = T v``, the first maximising action in ``arg`` (int8); returns the min and
         max of ``out - v`` (``work`` is unused; ``nchunks`` default :meth:`nchunks`)."""
         nc = self.nchunks() if nchunks is None else nchunks
-        lo, hi = _sweep_max_kernel(*self._common(), v, out, arg, nc, self._block)
+        lo, hi = sw.max_sweep(*self._dynamics(), v, out, arg, nc)
         return float(lo), float(hi)
 
     def sweep_policy(
@@ -768,14 +203,14 @@ class MatrixFreePatrol:
     ) -> tuple[float, float]:
         """``out = T_pi v`` for the actions ``sel`` (int8); returns min and max of ``out - v``."""
         nc = self.nchunks() if nchunks is None else nchunks
-        lo, hi = _sweep_policy_kernel(*self._common(), sel, v, out, nc, self._block)
+        lo, hi = sw.policy_sweep(*self._dynamics(), sel, v, out, nc)
         return float(lo), float(hi)
 
     # ------------------------------------------------------------------ passes
     def labels(self) -> np.ndarray:
         """The partition of every state, int32 (computed, as the model's :meth:`partition`)."""
         out = np.empty(self.n_vars, dtype=np.int32)
-        _labels_kernel(self._geo, self._stations, self._sp, out, self.nchunks(), self._block)
+        sw.labels_pass(*self._walk(), out, self.nchunks())
         return out
 
     def check_policy(self, policy: Any) -> np.ndarray:
@@ -790,11 +225,7 @@ class MatrixFreePatrol:
             x = int(np.flatnonzero((pol < 0) | (pol > 2))[0])
             raise ValidationError(f"policy[{x}] = {int(pol[x])} is not an action index 0..2")
         act = np.ascontiguousarray(pol, dtype=np.int8)
-        x = int(
-            _check_policy_kernel(
-                self._geo, self._stations, self._sp, act, self.nchunks(), self._block
-            )
-        )
+        x = int(sw.check_policy_pass(*self._walk(), act, self.nchunks()))
         if x >= 0:
             raise ValidationError(f"policy[{x}] = {int(act[x])} is not allowed in state {x}")
         return act
@@ -837,8 +268,8 @@ class MatrixFreePatrol:
         f = np.empty((nch, 9))
         st = np.empty((nch, 5), dtype=np.int64)
         pi_s = np.empty(self.n_vars, dtype=np.int8)
-        _greedy_gap_kernel(
-            *self._common(),
+        sw.greedy_pass(
+            *self._dynamics(),
             vstar,
             labels,
             np.ascontiguousarray(w_low, dtype=np.float64),
@@ -850,7 +281,6 @@ class MatrixFreePatrol:
             f,
             st,
             nch,
-            self._block,
         )
         del labels
         return pi_s, _reduce_greedy(f, st, self.n_vars)
@@ -861,56 +291,53 @@ class MatrixFreePatrol:
         nch = self.nchunks()
         f = np.empty((nch, 4))
         st = np.empty((nch, 3), dtype=np.int64)
-        _vsub_kernel(
-            self._geo,
-            self._stations,
-            self._sp,
+        sw.vsub_pass(
+            *self._walk(),
             vstar,
             vsub,
             np.ascontiguousarray(w_low, dtype=np.float64),
             f,
             st,
             nch,
-            self._block,
         )
-        c_max = int(np.argmax(f[:, _S_MAX]))
-        c_min = int(np.argmin(f[:, _S_MIN]))
-        c_low = int(np.argmin(f[:, _S_LOW_MIN]))
+        c_max = int(np.argmax(f[:, sw.S_MAX]))
+        c_min = int(np.argmin(f[:, sw.S_MIN]))
+        c_low = int(np.argmin(f[:, sw.S_LOW_MIN]))
         return {
-            "max": float(f[c_max, _S_MAX]),
-            "argmax": int(st[c_max, _J_ARGMAX]),
-            "mean": float(f[:, _S_SUM].sum() / self.n_vars),
-            "min": float(f[c_min, _S_MIN]),
-            "argmin": int(st[c_min, _J_ARGMIN]),
-            "low_min": float(f[c_low, _S_LOW_MIN]),
-            "low_argmin": int(st[c_low, _J_LOW_ARGMIN]),
+            "max": float(f[c_max, sw.S_MAX]),
+            "argmax": int(st[c_max, sw.J_ARGMAX]),
+            "mean": float(f[:, sw.S_SUM].sum() / self.n_vars),
+            "min": float(f[c_min, sw.S_MIN]),
+            "argmin": int(st[c_min, sw.J_ARGMIN]),
+            "low_min": float(f[c_low, sw.S_LOW_MIN]),
+            "low_argmin": int(st[c_low, sw.J_LOW_ARGMIN]),
         }
 
 
 def _reduce_greedy(f: np.ndarray, st: np.ndarray, n: int) -> dict[str, Any]:
     """Merge the greedy pass's per-chunk statistics (:meth:`MatrixFreePatrol.greedy_gap`)."""
-    up_c = int(np.argmin(f[:, _F_UP_MIN]))
-    low_c = int(np.argmin(f[:, _F_LOW_MIN]))
-    up_mean = float(f[:, _F_UP_SUM].sum() / n)
-    low_mean = float(f[:, _F_LOW_SUM].sum() / n)
-    gap_mean = float(f[:, _F_GAP_SUM].sum() / n)
+    up_c = int(np.argmin(f[:, sw.F_UP_MIN]))
+    low_c = int(np.argmin(f[:, sw.F_LOW_MIN]))
+    up_mean = float(f[:, sw.F_UP_SUM].sum() / n)
+    low_mean = float(f[:, sw.F_LOW_SUM].sum() / n)
+    gap_mean = float(f[:, sw.F_GAP_SUM].sum() / n)
     return {
-        "upper_max": float(f[:, _F_UP_MAX].max()),
+        "upper_max": float(f[:, sw.F_UP_MAX].max()),
         "upper_mean": up_mean,
-        "upper_min": float(f[up_c, _F_UP_MIN]),
-        "upper_argmin": int(st[up_c, _I_UP_ARGMIN]),
-        "lower_max": float(f[:, _F_LOW_MAX].max()),
+        "upper_min": float(f[up_c, sw.F_UP_MIN]),
+        "upper_argmin": int(st[up_c, sw.I_UP_ARGMIN]),
+        "lower_max": float(f[:, sw.F_LOW_MAX].max()),
         "lower_mean": low_mean,
-        "lower_min": float(f[low_c, _F_LOW_MIN]),
-        "lower_argmin": int(st[low_c, _I_LOW_ARGMIN]),
-        "gap_max": float(f[:, _F_GAP_MAX].max()),
+        "lower_min": float(f[low_c, sw.F_LOW_MIN]),
+        "lower_argmin": int(st[low_c, sw.I_LOW_ARGMIN]),
+        "gap_max": float(f[:, sw.F_GAP_MAX].max()),
         "gap_mean": gap_mean,
         "upper_share": up_mean / gap_mean if gap_mean > 0 else float("nan"),
         "lower_share": low_mean / gap_mean if gap_mean > 0 else float("nan"),
-        "optimal": int(st[:, _I_OPTIMAL].sum()),
-        "differs": int(st[:, _I_DIFFERS].sum()),
-        "suboptimal": int(st[:, _I_SUBOPT].sum()),
-        "max_one_step_loss": float(f[:, _F_LOSS_MAX].max()),
+        "optimal": int(st[:, sw.I_OPTIMAL].sum()),
+        "differs": int(st[:, sw.I_DIFFERS].sum()),
+        "suboptimal": int(st[:, sw.I_SUBOPT].sum()),
+        "max_one_step_loss": float(f[:, sw.F_LOSS_MAX].max()),
     }
 
 
