@@ -16,10 +16,9 @@ All input is validated here, at the boundary (with the shared checks of
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import ValidationError
 from ..stochastic import check_rows
@@ -35,8 +34,9 @@ from ..validation import (
     check_value_scale,
     first_index,
 )
-from . import gymnasium as gym_interop
-from . import interop
+
+if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is built (0.1 s at start-up)
+    import scipy.sparse as sp
 
 __all__ = ["FiniteMDP", "index_dtype"]
 
@@ -498,6 +498,8 @@ class FiniteMDP:
             a row that moves to the sink) and the outcomes of each pair listed in column
             order (padded with probability 0).
         """
+        from . import interop  # with scipy.sparse: only when a converter runs
+
         return interop.from_matrices(
             cls, P, R, discount, allowed=allowed, terminal=terminal,
             terminal_reward=terminal_reward, sense=sense, action_names=action_names,
@@ -522,6 +524,8 @@ class FiniteMDP:
         The same reading as :meth:`from_matrices` (see it for ``terminal``,
         ``terminal_reward`` and ``sense``); pymdptoolbox has no action masks.
         """
+        from . import interop  # with scipy.sparse: only when a converter runs
+
         return interop.from_matrices(
             cls, P, R, discount, terminal=terminal, terminal_reward=terminal_reward,
             sense=sense,
@@ -574,6 +578,8 @@ class FiniteMDP:
             For a ``Q`` of neither shape, a pair listed twice, an index out
             of range, a state with no available action, a row not summing to one.
         """
+        from . import interop  # with scipy.sparse: only when a converter runs
+
         return interop.from_quantecon(
             cls, R, Q, beta, s_indices, a_indices, layout=layout, terminal=terminal,
             terminal_reward=terminal_reward, action_names=action_names,
@@ -618,6 +624,8 @@ class FiniteMDP:
         terminal, terminal_reward, sense, action_names
             See :meth:`from_matrices`.
         """
+        from . import interop  # with scipy.sparse: only when a converter runs
+
         return interop.from_transitions(
             cls, rows, discount, rewards, reward_rows=reward_rows, n_states=n_states,
             n_actions=n_actions, terminal=terminal, terminal_reward=terminal_reward,
@@ -643,6 +651,8 @@ class FiniteMDP:
         Gymnasium itself is never imported. See
         :func:`lpbounds.model.gymnasium.from_gymnasium` for ``sink=`` and the checks.
         """
+        from . import gymnasium as gym_interop  # imported when a converter runs
+
         return gym_interop.from_gymnasium(cls, env, discount, sink=sink, action_names=action_names)
 
     def to_quantecon(self, form: str = "sa") -> Any:
@@ -660,6 +670,8 @@ class FiniteMDP:
         QuantEcon maximises: a ``sense="min"`` model is exported as its stored,
         negated-cost rewards, and an added sink as an ordinary state.
         """
+        from . import interop  # with scipy.sparse: only when a converter runs
+
         return interop.to_quantecon(self, form)
 
     def to_matrices(
@@ -685,6 +697,8 @@ class FiniteMDP:
                 f"action {u} is not allowed in state {x}; pymdptoolbox matrices cannot "
                 "express that: pass disallowed_reward= (a very negative number)"
             )
+        import scipy.sparse as sp
+
         probs = self.probabilities_full()
         mats = []
         rows = np.repeat(np.arange(n), self.n_outcomes)

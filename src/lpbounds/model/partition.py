@@ -8,14 +8,16 @@ counts from 1). It provides the aggregation basis ``Phi`` of eq. (10),
 from __future__ import annotations
 
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import ValidationError
 from ..validation import as_array, as_float_array, check_array, check_int
 from .mdp import index_dtype
+
+if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is built (0.1 s at start-up)
+    import scipy.sparse as sp
 
 __all__ = ["Partition"]
 
@@ -123,6 +125,8 @@ class Partition:
     @cached_property
     def basis(self) -> sp.csr_matrix:
         """The basis ``Phi`` of eq. (10), a sparse (n, M) 0/1 matrix."""
+        import scipy.sparse as sp
+
         n = self.n_states
         return sp.csr_matrix(
             (np.ones(n), self.labels, np.arange(n + 1)), shape=(n, self.n_partitions)

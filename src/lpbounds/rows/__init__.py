@@ -80,10 +80,9 @@ per solve and passed to each of its sweeps.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Literal, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol, runtime_checkable
 
 import numpy as np
-import scipy.sparse as sp
 
 from .._kernels import dispatch as _backend
 from ..errors import ValidationError
@@ -99,6 +98,9 @@ from ..validation import (
     check_value_scale,
     check_vector,
 )
+
+if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is built (0.1 s at start-up)
+    import scipy.sparse as sp
 
 __all__ = ["BellmanRows", "PackedSweeps", "PolicySweeps", "PostDecisionRows", "SweepOperator"]
 
@@ -676,6 +678,8 @@ class BellmanRows:
         ``E[r, owner_r] = 1`` and ``P[r, k] = sum of probs_{r,l}`` with ``targets_{r,l} = k``;
         zero-probability padding is dropped.
         """
+        import scipy.sparse as sp
+
         n_rows, n_out = self.targets.shape
         probs = np.asarray(self.probs)
         keep = probs != 0.0
@@ -690,6 +694,8 @@ class BellmanRows:
 
     def transition_matrix(self, rows: np.ndarray) -> sp.csr_matrix:
         """The (n_vars, n_vars) transition matrix of the policy choosing ``rows[i]`` at ``i``."""
+        import scipy.sparse as sp
+
         rows = np.asarray(rows, dtype=np.int64)
         probs = np.asarray(self.probs)[rows]
         cols = self.targets[rows]
