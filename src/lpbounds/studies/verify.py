@@ -1045,7 +1045,8 @@ def _remark2_record(
     )
     detail = fail or (
         "certified OPT(c1+c2) - OPT(c1) - OPT(c2) > 0: no common optimum (exact rational "
-        "brackets); lp_interval = OPT(c1+c2), exact_interval = upper OPT(c1) + OPT(c2)"
+        "brackets); the LP interval is OPT(c1+c2)'s bracket, the exact one the upper "
+        "end of OPT(c1) + OPT(c2)"
     )
     return make_record("Remark 2", "ALP optimum depends on c", inst, solver, cmp, detail, tally)
 
