@@ -412,3 +412,23 @@ def test_cli_unknown_solver(tiny_model, capsys):
     assert rc == 2
     err = capsys.readouterr().err
     assert "unknown solver" in err and len(err.strip().splitlines()) == 1
+
+
+def test_shelf_model_sizes_are_known_without_building():
+    """The default run verifies the shelf models: their sizes, read from the parameters,
+    are the built models' (a Gymnasium model's stays unknown: None)."""
+    from lpbounds.model.instances import load_instance, models_dir
+
+    seen = set()
+    for path in sorted(models_dir().glob("*.toml")):
+        inst = load_instance(str(path))
+        if inst.kind in ("forest", "gridworld", "admission_queue", "inventory", "savings"):
+            assert verify.estimated_states(inst) == inst.mdp().n_states, path.name
+            seen.add(inst.kind)
+        elif inst.kind == "gymnasium":
+            assert verify.estimated_states(inst) is None
+    assert seen == {"forest", "gridworld", "admission_queue", "inventory", "savings"}
+    insts, skipped = verify.model_instances(max_states=10_000)
+    names = {i.name for i in insts}
+    assert {"forest", "gridworld", "queue", "inventory", "savings"} <= names
+    assert "patrol-paper" in skipped and "forest" not in skipped

@@ -250,12 +250,17 @@ def estimated_states(inst: Any) -> int | None:
     Returns
     -------
     int or None
-        ``[model] n_states`` when the file gives it, a patrol model's count from its
-        parameters, else None.
+        ``[model] n_states`` when the file gives it, a patrol model's or a shelf model's
+        count from its parameters (:func:`lpbounds.model.shelf.model_sizes`), else None
+        (a Gymnasium model's size is not known without building its environment).
     """
     size = inst.config["model"].get("n_states")
     if isinstance(size, int):
         return size
+    from ..model import shelf
+
+    if inst.kind in shelf.SHELF_KINDS:
+        return shelf.model_sizes(inst.config["model"]).n_states
     if inst.kind == "patrol":
         try:
             from ..patrol.instance import model_for, params_from_instance
