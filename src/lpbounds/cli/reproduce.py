@@ -58,7 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--beyond",
         action="store_true",
         help="also go beyond the paper's size: exact V* at 5 and 6 stations (matrix-free; at 6 "
-        "stations ~15 GB and hours on 2 cores, see --beyond-sizes), pi_s by Monte Carlo at 6 "
+        "stations ~14 GB and ~10 min on 2 cores, see --beyond-sizes), pi_s by Monte Carlo at 6 "
         "and 8 stations, and a 'Beyond the paper' report section with beyond.json and a figure",
     )
     p.add_argument(

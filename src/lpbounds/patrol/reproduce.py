@@ -926,7 +926,8 @@ def reproduce(
         ``V*`` at 5 and 6 stations (matrix-free; the 4-station numbers are this run's),
         the greedy policy by Monte Carlo at 6 and 8 stations, and a "Beyond the paper"
         section of the report with ``beyond.json`` and a figure. Long: the 6-station
-        study needs about 15 GB and hours on 2 cores (``beyond_sizes``).
+        study needs about 14 GB and 10 minutes on 2 cores (``beyond_sizes``; measured in
+        docs/reproduction.md).
     beyond_cache : path
         Where the 5- and 6-station results are kept between runs (reused when the
         parameters are the same; the 6-station V* is checkpointed there).
