@@ -173,3 +173,46 @@ def test_interrupt_just_after_the_rename_is_a_completed_run(previous, tmp_path):
     man = _assert_complete(out)
     assert man["instance"] == "patrol-small"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"], "leftovers beside --out"
+
+
+SWALLOWED = """
+import gc, sys, time, weakref
+import lpbounds.cli.main as cli
+
+class Thing:
+    pass
+
+def boom(_):
+    raise KeyboardInterrupt  # what a Ctrl-C inside a weakref callback looks like
+
+def run(args):
+    t = Thing()
+    r = weakref.ref(t, boom)
+    del t  # the callback runs here: Python cannot raise from it, it calls unraisablehook
+    gc.collect()
+    end = time.monotonic() + 30  # the re-sent interrupt arrives a millisecond later
+    while time.monotonic() < end:
+        pass
+    print("not interrupted")
+    return 0
+
+cli.build_parser = lambda: type("P", (), {"parse_args": lambda self, a: type(
+    "A", (), {"func": staticmethod(run), "command": "x", "quiet": False, "verbose": 0})()})()
+sys.argv = ["lpbounds"]
+cli.entry()
+"""
+
+
+def test_a_ctrl_c_inside_a_weakref_callback_stops_the_command_without_a_traceback():
+    """Python prints an exception raised in a weakref callback or ``__del__`` as "Exception
+    ignored in ..." with a traceback, and goes on: the command delivers it again as SIGINT,
+    so it ends as an interrupted command (130, one line), not with a traceback."""
+    proc = subprocess.run(
+        [sys.executable, "-c", SWALLOWED],
+        capture_output=True,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    assert proc.returncode == 130, proc.stderr
+    assert "Traceback" not in proc.stderr and "not interrupted" not in proc.stdout
+    assert proc.stderr.strip().splitlines()[-1] == "lpbounds x: interrupted"

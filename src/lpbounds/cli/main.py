@@ -14,6 +14,7 @@ import importlib
 import signal
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from ..errors import LPBoundsError, OutputError, SolverNotInstalledError, ValidationError
 from ..outputs import committed_outputs
@@ -128,14 +129,33 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exit_status(exc)
 
 
+def _reraise_swallowed_interrupt(unraisable: Any) -> None:
+    """``sys.unraisablehook`` of the command: a Ctrl-C that landed in code Python cannot
+    raise from (a weakref callback or ``__del__``, e.g. matplotlib's transforms) would be
+    printed as "Exception ignored in ..." with a traceback and then lost; it is delivered
+    again instead, so the command stops as on any Ctrl-C (130, one line). Not from inside
+    the hook (a KeyboardInterrupt there is unraisable again): a timer thread interrupts
+    the main thread a millisecond later, once the hook has returned."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        import _thread
+        import threading
+
+        threading.Timer(0.001, _thread.interrupt_main).start()
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 def entry() -> None:
     """The console script: :func:`main`, then exit with its status.
 
     A Ctrl-C that arrives once :func:`main` has returned (its output is complete by then)
     must not kill the interpreter by signal during shutdown (exit status -2, and possibly a
     traceback): SIGINT is ignored from the moment :func:`main` returns, and one arriving
-    in between is still reported as an interruption (130, or 0 after a commit).
+    in between is still reported as an interruption (130, or 0 after a commit). One that
+    lands in a weakref callback or ``__del__`` is delivered again
+    (:func:`_reraise_swallowed_interrupt`).
     """
+    sys.unraisablehook = _reraise_swallowed_interrupt  # the command's own process only
     try:
         try:
             code = main()
