@@ -442,3 +442,15 @@ def test_property_game_fixed_point_equals_milp(n, a, l_out, m_frac, seed, discou
     assert check_result(mdp, part, fp_res, ref) == check_result(mdp, part, milp_res, ref)
     assert np.abs(fp - ref).max() <= tol, f"fixed point vs reference {np.abs(fp - ref).max():.2e}"
     assert np.abs(milp - ref).max() <= tol, f"milp vs reference {np.abs(milp - ref).max():.2e}"
+
+
+def test_the_progress_text_never_shows_nan():
+    """The progress bar's bracket before a method has an end: "-", not "[nan, ...]"."""
+    from lpbounds.formulations.nlp.problem import progress_status
+    from lpbounds.formulations.nlp.results import NLPIteration
+
+    nan = float("nan")
+    first = NLPIteration(iteration=0, lower=nan, upper=3.25, gap=nan, cuts_added=4, seconds=0.1)
+    assert progress_status(first) == "it 0  [-, 3.25]  gap -  cuts +4"
+    later = NLPIteration(iteration=3, lower=3.0, upper=3.25, gap=0.25, cuts_added=0, seconds=1.0)
+    assert progress_status(later) == "it 3  [3, 3.25]  gap 2.50e-01"

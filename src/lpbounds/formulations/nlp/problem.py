@@ -104,7 +104,15 @@ from .stop import StopReason
 if TYPE_CHECKING:
     from .cuts import NLPMaster
 
-__all__ = ["METHOD_KEYWORDS", "NLP", "NLPMILP", "NLPIteration", "NLPResult", "StopReason"]
+__all__ = [
+    "METHOD_KEYWORDS",
+    "NLP",
+    "NLPMILP",
+    "NLPIteration",
+    "NLPResult",
+    "StopReason",
+    "progress_status",
+]
 
 Method = Literal["cutting-planes", "strategy-iteration", "milp", "fixed-point"]
 METHODS: tuple[str, ...] = ("cutting-planes", "strategy-iteration", "milp", "fixed-point")
@@ -936,11 +944,18 @@ def _progress_bar(enabled: bool, method: str, total: int | None) -> Iterator[Cal
         task = prog.add_task(method, total=total, status="")
 
         def tick(e: NLPIteration) -> None:
-            prog.update(
-                task,
-                completed=e.iteration,
-                status=f"it {e.iteration}  [{e.lower:.6g}, {e.upper:.6g}]  gap {e.gap:.2e}"
-                + (f"  cuts +{e.cuts_added}" if e.cuts_added else ""),
-            )
+            prog.update(task, completed=e.iteration, status=progress_status(e))
 
         yield tick
+
+
+def progress_status(e: NLPIteration) -> str:
+    """The progress bar's text for one iteration: the bracket, the gap and the cuts added;
+    an end or gap the method does not have yet (nan) reads "-" (no "[nan, 3.2]")."""
+
+    def num(x: float, spec: str) -> str:
+        return "-" if x != x else format(x, spec)  # x != x: nan
+
+    text = f"it {e.iteration}  [{num(e.lower, '.6g')}, {num(e.upper, '.6g')}]"
+    text += f"  gap {num(e.gap, '.2e')}"
+    return text + (f"  cuts +{e.cuts_added}" if e.cuts_added else "")
