@@ -8,6 +8,22 @@ import pytest
 import lpbounds as lb
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """Before pytest-xdist starts its workers, import QuantEcon once in the controller.
+
+    Its import compiles numba gufuncs with ``cache=True`` (quantecon.random.utilities). In a
+    fresh environment two workers importing it at once wrote that cache together, and from
+    then on every import of QuantEcon aborted the interpreter inside llvmlite ("Fatal
+    Python error: Aborted", seen in CI). One import here writes the cache before any worker
+    reads it."""
+    if hasattr(config, "workerinput") or not config.getoption("numprocesses", None):
+        return  # a worker, or a run without workers
+    try:
+        import quantecon  # noqa: F401
+    except ImportError:
+        pass
+
+
 def two_state_mdp(discount: float = 0.9) -> lb.FiniteMDP:
     """State 0: stay (reward 1) or move to 1 (reward 0); state 1: stay (reward 2) only.
 
