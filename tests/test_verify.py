@@ -279,7 +279,7 @@ def test_an_inaccurate_point_is_inconclusive(tiny_instance):
 
 def test_a_loose_first_order_solver_is_never_violated(tiny_instance, monkeypatch):
     """SCS with eps 1e-3: some claims inconclusive, none violated."""
-    real = verify._solve
+    real = verify.try_solve
 
     def loose(form, solver):
         try:
@@ -287,7 +287,7 @@ def test_a_loose_first_order_solver_is_never_violated(tiny_instance, monkeypatch
         except lb.errors.LPBoundsError:
             return real(form, solver)
 
-    monkeypatch.setattr(verify, "_solve", loose)
+    monkeypatch.setattr(verify, "try_solve", loose)
     recs = verify.verify_instance(tiny_instance, ["SCS"], n_costs=2)
     verdicts = {r["verdict"] for r in recs if r["solver"] == "SCS"}
     assert "violated" not in verdicts
@@ -390,7 +390,7 @@ def test_cli_exits_1_on_a_violated_claim(tiny_model, monkeypatch, capsys):
 
 
 def test_cli_strict_fails_on_inconclusive(tiny_model, monkeypatch, capsys):
-    real = verify._solve
+    real = verify.try_solve
 
     def noisy(form, solver):  # every RLP point 1e-3 off: valid but wide brackets
         res, msg = real(form, solver)
@@ -400,7 +400,7 @@ def test_cli_strict_fails_on_inconclusive(tiny_model, monkeypatch, capsys):
             )
         return res, msg
 
-    monkeypatch.setattr(verify, "_solve", noisy)
+    monkeypatch.setattr(verify, "try_solve", noisy)
     argv = ["verify", tiny_model, "--random", "0", "--solvers", "HIGHS"]
     assert main(argv) == 0
     assert "inconclusive" in capsys.readouterr().out

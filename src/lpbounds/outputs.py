@@ -44,7 +44,7 @@ import subprocess
 import tempfile
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -60,6 +60,7 @@ __all__ = [
     "file_sha256",
     "metadata_lines",
     "run_metadata",
+    "write_atomic",
     "write_text_atomic",
 ]
 
@@ -269,23 +270,36 @@ def check_output_dir(
     return Path(path)
 
 
-def write_text_atomic(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename:
-    ``path`` holds either its previous content or the new one, never a part."""
+def write_atomic(path: str | Path, write: Callable[[Path], Any]) -> Path:
+    """Make ``path`` through a temporary file in the same folder and a rename: ``write(tmp)``
+    fills the temporary file (any writer that takes a path: ``DataFrame.to_parquet``, ...),
+    then it replaces ``path``, which holds either its previous content or the new one, never
+    a part. If ``write`` raises, the temporary file is removed and ``path`` is untouched."""
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
+        write(Path(tmp))
         os.replace(tmp, p)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
     return p
+
+
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` atomically (:func:`write_atomic`), flushed to the disk
+    before the rename."""
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "w") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+
+    return write_atomic(path, write)
 
 
 def file_sha256(path: Path) -> str:

@@ -181,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run_models(args: argparse.Namespace, solvers: list[str], claims: list | None) -> int:
     """The packaged models (or MODEL) and --random N seeded garnets, every record shown."""
-    from ..studies.claims import BuiltinClaim, Conjecture, resolve_claims, run_claims
+    from ..studies.claims import resolve_claims, run_claims, split_claims
     from ..studies.verify import (
         INSTANCE_CHECKS,
         exit_status,
@@ -192,10 +192,7 @@ def _run_models(args: argparse.Namespace, solvers: list[str], claims: list | Non
         write_json,
     )
 
-    chosen = resolve_claims(claims)
-    checks = [c.check for c in chosen if isinstance(c, BuiltinClaim) and c.check != "Remark 2"]
-    conjectures = [c for c in chosen if isinstance(c, Conjecture)]
-    remark2 = any(isinstance(c, BuiltinClaim) and c.check == "Remark 2" for c in chosen)
+    checks, conjectures, remark2 = split_claims(resolve_claims(claims))
     insts, skipped = model_instances(
         None if args.model is None else [args.model], max_states=args.max_states
     )

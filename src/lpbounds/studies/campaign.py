@@ -57,12 +57,10 @@ only ones that differ between two runs of one campaign.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
 import re
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -76,7 +74,7 @@ from ..formulations import resolve_solver
 from ..model.generators import garnet, random_partition
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
-from ..outputs import write_text_atomic
+from ..outputs import write_atomic, write_text_atomic
 from ..status import Verdict
 from ..tolerances import LP_COMPARE_RTOL
 from .claims import (
@@ -89,11 +87,11 @@ from .claims import (
 )
 from .shrink import shrink, size_of, write_model
 from .verify import (
-    EXACT_METHODS,
     INSTANCE_CHECKS,
     RECORD_COLUMNS,
     Record,
     VerifyInstance,
+    check_exact_method,
     default_solvers,
     exact_interval,
     exit_status,
@@ -390,11 +388,15 @@ class Batch:
         return "remark2" if self.number < 0 else f"batch-{self.number:06d}"
 
 
+#: The ``claim`` of the record of an instance that could not be built or checked.
+NOT_CHECKED = "the instance could not be checked"
+
+
 def _not_checked(inst_name: str, claim: Claim, error: str) -> Record:
     nan = float("nan")
     return {
         "check": claim.name,
-        "claim": "the instance could not be checked",
+        "claim": NOT_CHECKED,
         "instance": inst_name,
         "solver": "exact",
         "verdict": Verdict.INCONCLUSIVE,
@@ -461,16 +463,8 @@ def _write_frame(frame: pd.DataFrame, path: Path) -> None:
     """Write a table atomically (CSV with ``nan`` for missing numbers, or Parquet)."""
     if path.suffix == ".csv":
         write_text_atomic(path, frame.to_csv(index=False, na_rep="nan"))
-        return
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        frame.to_parquet(tmp, index=False)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    else:
+        write_atomic(path, lambda tmp: frame.to_parquet(tmp, index=False))
 
 
 def _read_frame(path: Path) -> pd.DataFrame:
@@ -742,7 +736,7 @@ def _shrink_all(
     bad = frame[
         frame["verdict"].isin(list(verdicts))
         & (frame["campaign_index"] >= 0)
-        & (frame["claim"] != "the instance could not be checked")
+        & (frame["claim"] != NOT_CHECKED)
         & frame["check"].isin(list(by_name))
     ]
     bad = bad.drop_duplicates(["instance", "check", "claim", "solver"])
@@ -973,10 +967,7 @@ def run_campaign(
     """
     t0 = time.perf_counter()
     chosen = _check_params(n, seed, families, batch_size, n_costs, rtol)
-    if exact_method not in EXACT_METHODS:
-        raise ValidationError(
-            f"exact_method: unknown method {exact_method!r}; known: {', '.join(EXACT_METHODS)}"
-        )
+    check_exact_method(exact_method)
     _check_parquet(fmt)
     claim_list = resolve_claims(claims)
     names = [resolve_solver(s) for s in (default_solvers() if solvers is None else solvers)]

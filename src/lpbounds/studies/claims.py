@@ -72,12 +72,14 @@ __all__ = [
     "Conjecture",
     "Interval",
     "Solved",
+    "SplitClaims",
     "Trial",
     "claim_names",
     "load_claim",
     "resolve_claims",
     "run_claims",
     "run_remark2",
+    "split_claims",
 ]
 
 #: A certified interval vector: ``(lower, upper)``, one entry per state or block.
@@ -164,9 +166,7 @@ class Trial:
     @property
     def accuracy(self) -> float:
         """The requested accuracy in value units: ``rtol * max|R| / (1 - lambda)``."""
-        mdp = self.mdp
-        rmax = float(np.abs(mdp.rewards[mdp.allowed]).max(initial=0.0))
-        return self.rtol * dp_scale(rmax, mdp.discount)
+        return self.rtol * dp_scale(self.mdp.reward_absmax, self.mdp.discount)
 
     def _fixed(self) -> _Exact:
         if self._exact is None:
@@ -406,6 +406,26 @@ def resolve_claims(claims: Iterable[str | Claim | Predicate] | None) -> list[Cla
 
 
 # ---------------------------------------------------------------------- running them
+class SplitClaims(NamedTuple):
+    """Claims by how they run: the built-in checks of one instance (names of
+    :data:`INSTANCE_CHECKS`), the conjectures, and whether Remark 2 is among them."""
+
+    checks: list[str]
+    conjectures: list[Conjecture]
+    remark2: bool
+
+
+def split_claims(claims: Iterable[Claim]) -> SplitClaims:
+    """``claims`` split by how they run (:class:`SplitClaims`), each kind in its order."""
+    items = list(claims)
+    builtin = [c.check for c in items if isinstance(c, BuiltinClaim)]
+    return SplitClaims(
+        [c for c in builtin if c != REMARK2],
+        [c for c in items if isinstance(c, Conjecture)],
+        REMARK2 in builtin,
+    )
+
+
 def _verdict_of(outcome: Any, name: str, accuracy: float) -> tuple[Comparison, str]:
     """A predicate's outcome as a Comparison and a detail string."""
     detail = ""
@@ -480,7 +500,7 @@ def run_claims(
     -------
     list of dict
     """
-    checks = [c.check for c in claims if isinstance(c, BuiltinClaim) and c.check != REMARK2]
+    checks, conjectures, _ = split_claims(claims)
     records: list[Record] = []
     if checks:
         found = verify_instance(
@@ -494,7 +514,7 @@ def run_claims(
         )
         records += [{**r, "error": ""} for r in found]
     exact = _Exact(inst, exact_method)
-    for conj in (c for c in claims if isinstance(c, Conjecture)):
+    for conj in conjectures:
         for solver in list(solvers) if conj.uses_solver else [None]:
             trial = Trial(inst, solver, rtol, exact_method=exact_method, _exact=exact)
             records.append(_conjecture_record(conj, trial))
@@ -506,6 +526,6 @@ def run_remark2(
 ) -> list[Record]:
     """Remark 2's records (:func:`~lpbounds.studies.verify.verify_remark2`) when ``claims``
     has it, else none."""
-    if not any(isinstance(c, BuiltinClaim) and c.check == REMARK2 for c in claims):
+    if not split_claims(claims).remark2:
         return []
     return [{**r, "error": ""} for r in verify_remark2(solvers, seed=seed, rtol=rtol)]

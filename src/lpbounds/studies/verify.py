@@ -119,6 +119,7 @@ __all__ = [
     "VerifyInstance",
     "VerifyResult",
     "alp_value_bracket",
+    "check_exact_method",
     "default_solvers",
     "estimated_states",
     "exact_interval",
@@ -374,11 +375,6 @@ def try_solve(form: Any, solver: str) -> tuple[LPResult | None, str]:
     -------
     (LPResult or None, str)
     """
-    return _solve(form, solver)
-
-
-def _solve(form: Any, solver: str) -> tuple[LPResult | None, str]:
-    """The result if the solver returned a point (whatever its status), else a message."""
     try:
         res = form.solve(solver, raise_on_failure=False)
     except LPBoundsError as exc:
@@ -409,6 +405,21 @@ class _Refs:
 
 #: The methods of :func:`~lpbounds.dp.solve_exact` a check may use for its exact side.
 EXACT_METHODS: tuple[str, ...] = ("mpi", "vi", "pi", "ipi")
+
+
+def check_exact_method(method: Any) -> str:
+    """``method`` checked: one of :data:`EXACT_METHODS`.
+
+    Raises
+    ------
+    ValidationError
+        For any other value (the message lists the known methods).
+    """
+    if method not in EXACT_METHODS:
+        raise ValidationError(
+            f"exact_method: unknown method {method!r}; known: {', '.join(EXACT_METHODS)}"
+        )
+    return str(method)
 
 
 def exact_interval(model: Any, method: str = "mpi") -> tuple[np.ndarray, np.ndarray]:
@@ -451,7 +462,7 @@ def _references(
     # LLP's surplus costs: one dense, one with about half zeros
     d_list = [rng.uniform(0.0, 1.0, (mdp.n_states, mdp.n_actions)) for _ in range(2)]
     d_list[1][rng.random(d_list[1].shape) < 0.5] = 0.0
-    scale = dp_scale(float(np.abs(mdp.rewards[mdp.allowed]).max(initial=0.0)), mdp.discount)
+    scale = dp_scale(mdp.reward_absmax, mdp.discount)
     return _Refs(vfull_lo, vfull_hi, v_lo, v_hi, rlp_rows, rtol * scale, costs, d_list, method)
 
 
@@ -550,7 +561,7 @@ def _cost_claims(
     objs, entries, doms, fail, first = [], [], [], "", None
     tally = Tally()
     for k, (form, cost) in enumerate(forms):
-        res, msg = _solve(form, solver)
+        res, msg = try_solve(form, solver)
         tally.add(res)
         if res is None:
             objs.append(_no_point(acc))
@@ -607,7 +618,7 @@ def _lemma2_checks(
     )
     pred_lo = np.nextafter(refs.v_lo - beta, -np.inf)
     note = f"predicted [v* - {beta:.2e}, v*] from the duals' certified slack"
-    res, msg = _solve(slp, solver)
+    res, msg = try_solve(slp, solver)
     tally = Tally()
     tally.add(res)
     if res is None:
@@ -684,7 +695,7 @@ def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Rec
     eq, dom, fail, tally = [], [], "", Tally()
     for L in IB_BLOCKS:
         ib = IB(mdp, part, L)
-        res, msg = _solve(ib, solver)
+        res, msg = try_solve(ib, solver)
         tally.add(res)
         if res is None:
             eq.append(_no_point(acc))
@@ -711,7 +722,7 @@ def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Rec
     llp, fail, tally = [], "", Tally()
     for d in refs.d_list:
         form = LLP(mdp, part, d)
-        res, msg = _solve(form, solver)
+        res, msg = try_solve(form, solver)
         tally.add(res)
         if res is None:
             llp.append(_no_point(acc))
@@ -865,10 +876,7 @@ def verify_instance(
     if not (np.isfinite(rtol) and rtol > 0):
         raise ValidationError(f"rtol must be a positive finite number; got {rtol!r}")
     chosen = _check_names(checks)
-    if exact_method not in EXACT_METHODS:
-        raise ValidationError(
-            f"exact_method: unknown method {exact_method!r}; known: {', '.join(EXACT_METHODS)}"
-        )
+    check_exact_method(exact_method)
     names = [resolve_solver(s) for s in solvers]
     refs = _references(inst, n_costs, seed, rtol, exact_method)
     records = _exact_checks(inst, refs, chosen)
@@ -1009,7 +1017,7 @@ def verify_remark2(
     for solver in names:
         brackets, fail, tally = [], "", Tally()
         for c in costs:
-            res, msg = _solve(ALP(ex.mdp, ex.basis, c), solver)
+            res, msg = try_solve(ALP(ex.mdp, ex.basis, c), solver)
             tally.add(res)
             fail = fail or msg
             brackets.append(
@@ -1183,7 +1191,7 @@ class VerifyResult(NamedTuple):
         return exit_status(self.records, strict=strict)
 
 
-_CHECK_ORDER = ["Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2", "Remark 2"]
+_CHECK_ORDER = [*INSTANCE_CHECKS, "Remark 2"]
 #: Verdicts from best to worst (the order of the summary's counts)
 _VERDICTS = (Verdict.HOLDS, Verdict.INCONCLUSIVE, Verdict.VIOLATED)
 _VERDICT_RANK = {v: k for k, v in enumerate(_VERDICTS)}
