@@ -138,15 +138,13 @@ def in_order(repeat: int) -> None:
     path on the paper's instance (whole solves, alternating), their cost per state at 4
     and 5 stations against the bandwidth floor, and what 6, 7 and 8 stations need."""
     load0 = os.getloadavg()
-    paper, note = paper_rows(repeat)
-    runs = _last_paper_runs
+    paper, note, runs = paper_rows(repeat)
     load1 = os.getloadavg()
     names = ["patrol-paper", "patrol-m5-paper"]
     r = run_isolated(SWEEPS.replace("__NAMES__", repr(names)), timeout=3600)
     bw = max(r["bw"].values())
     many = r["many"]
     rows = []
-    per_state: dict[str, dict[str, float]] = {}
     for name, res in r["sizes"].items():
         n = res["n"]
         for path in ("array", "matrix-free"):
@@ -160,23 +158,18 @@ def in_order(repeat: int) -> None:
                 t1 = res[path][f"{kind}/1"][0]
                 tm, med = res[path][f"{kind}/{many}"]
                 floor_ms = bps * n / bw / 1e6
-                # the solve's timed thread choice takes the faster count
-                per_state.setdefault(f"{name}/{path}", {})[kind] = min(t1, tm) / n * 1e9
                 rows.append(
                     f"| {name} | {path} | {'improvement' if kind == 'max' else 'evaluation'} | "
                     f"{n:,} | {bps:.0f} | {floor_ms:.1f} | {t1 * 1e3:.1f} | {tm * 1e3:.1f} | "
                     f"{med * 1e3:.1f} | {t1 / n * 1e9:.1f} | {tm / n * 1e9:.1f} | "
                     f"{tm * 1e3 / floor_ms:.1f}x |"
                 )
-    body = _in_order_body(repeat, paper, note, runs, rows, per_state, r, (load0, load1))
+    body = _in_order_body(repeat, paper, note, runs, rows, r, (load0, load1))
     write_section("sweeps-in-order", body)
     print(body)
 
 
-_last_paper_runs: dict[str, list[dict]] = {}
-
-
-def _in_order_body(repeat, paper, note, runs, rows, per_state, r, loads) -> str:
+def _in_order_body(repeat, paper, note, runs, rows, r, loads) -> str:
     """The text of the ``sweeps-in-order`` section (see :func:`in_order`)."""
     est, big = _beyond_sizes(Path("out/beyond"))
     ratios = ""
@@ -325,15 +318,14 @@ def uptime() -> str:
         return "?"
 
 
-def paper_rows(repeat: int) -> tuple[list[str], str]:
-    """Array path and matrix-free V* on the paper's instance, alternating, fresh processes."""
+def paper_rows(repeat: int) -> tuple[list[str], str, dict[str, list[dict]]]:
+    """Array path and matrix-free V* on the paper's instance, alternating, fresh processes:
+    the table rows, the verdict on their equality and the runs."""
     runs: dict[str, list[dict]] = {"array": [], "matrix-free": []}
     for _ in range(repeat):
         for path in runs:
             runs[path].append(run_isolated(PAPER.format(path=path), timeout=3600))
             print(path, runs[path][-1], flush=True)
-    _last_paper_runs.clear()
-    _last_paper_runs.update(runs)
     same = {r["values_sha256"] for rs in runs.values() for r in rs}
     pol = {r["policy_sha256"] for rs in runs.values() for r in rs}
     rows = []
@@ -352,7 +344,7 @@ def paper_rows(repeat: int) -> tuple[list[str], str]:
         else f"NOT equal: {len(same)} distinct V*, {len(pol)} distinct policies"
     )
     note = f"V* of the two paths: {verdict}; matrix-free / array time: {tm / ta:.2f}."
-    return rows, note
+    return rows, note, runs
 
 
 def run_size(name: str, cache: Path) -> dict:
@@ -438,7 +430,7 @@ def main() -> None:
     cache = Path(args.cache)
     cache.mkdir(parents=True, exist_ok=True)
     load = [uptime()]
-    paper, note = ([], "not run") if args.no_paper else paper_rows(args.repeat)
+    paper, note, _ = ([], "not run", {}) if args.no_paper else paper_rows(args.repeat)
     load.append(uptime())
     from lpbounds.patrol.beyond import BEYOND_MODELS
 
