@@ -71,6 +71,21 @@ assert dp.error_bound < 1e-7 and cert.error_bound < 1e-6
     assert imported_by(code, compiled) == []
 
 
+def test_a_large_row_solve_needs_no_numba():
+    """A random MDP above the numpy path's size runs on the native (C) row sweeps: its
+    process imports no numba (0.5 s of start-up and first call, docs/benchmarks.md)."""
+    code = """
+import lpbounds as lb
+from lpbounds._kernels import dispatch
+mdp = lb.garnet(20_000, 3, 5, 0.9, seed=7)  # 300,000 reads per sweep
+assert mdp.n_states * 15 >= dispatch.SMALL_READS
+dp = lb.solve_exact(mdp)
+ev = lb.evaluate_policy(mdp, dp.policy, method="iterative")
+assert dp.error_bound < 1e-9 and ev.error_bound < 1e-9
+"""
+    assert imported_by(code, ("numba", "lpbounds._kernels.native")) == ["lpbounds._kernels.native"]
+
+
 @pytest.mark.parametrize("name", lpbounds.__all__)
 def test_every_public_name_resolves_as_before(name):
     value = getattr(lpbounds, name)

@@ -7,7 +7,9 @@ a read-only broadcast view (stride 0) when all rows share one distribution.
 
 These are the fast paths for large models; :mod:`lpbounds._kernels.twins` has a numpy twin of
 each, with the same arithmetic, used below :data:`lpbounds._kernels.dispatch.SMALL_READS` reads per
-sweep; ``tests/test_fast_paths.py`` checks that both give the same numbers.
+sweep; ``tests/test_fast_paths.py`` checks that both give the same numbers. The improvement
+and evaluation sweeps of exact DP on rows, their policy gather and the successor check are
+C instead (:mod:`lpbounds._kernels.native`: a one-model process then needs no numba).
 """
 
 from __future__ import annotations
@@ -84,90 +86,6 @@ def hash_rows(owner, action, targets, probbits, out):  # pragma: no cover
             h = (h ^ np.uint64(probbits[r, ll])) * mult
             h ^= h >> np.uint64(27)
         out[r] = h
-
-
-@njit(parallel=True, **_OPTS)
-def bellman_max_stats(
-    indptr, reward, targets, probs, discount, v, out, arg, nchunks
-):  # pragma: no cover
-    """``out[i] = max_r q_r`` over owner ``i``'s rows, ``arg[i]`` the first maximising row;
-    returns ``min`` and ``max`` of ``out - v`` (one pass)."""
-    n = indptr.shape[0] - 1
-    n_out = targets.shape[1]
-    lo = np.full(nchunks, np.inf)
-    hi = np.full(nchunks, -np.inf)
-    size = (n + nchunks - 1) // nchunks
-    for c in prange(nchunks):
-        start = c * size
-        end = min(n, start + size)
-        lc = np.inf
-        hc = -np.inf
-        for i in range(start, end):
-            best = -np.inf
-            best_r = -1
-            for r in range(indptr[i], indptr[i + 1]):
-                acc = 0.0
-                for ll in range(n_out):
-                    acc += probs[r, ll] * v[targets[r, ll]]
-                q = reward[r] + discount * acc
-                if q > best:
-                    best = q
-                    best_r = r
-            out[i] = best
-            arg[i] = best_r
-            d = best - v[i]
-            lc = min(lc, d)
-            hc = max(hc, d)
-        lo[c] = lc
-        hi[c] = hc
-    return lo.min(), hi.max()
-
-
-@njit(parallel=True, **_OPTS)
-def policy_sweep_stats(rows, reward, targets, probs, discount, v, out, nchunks):  # pragma: no cover
-    """``out[i] = q_{rows[i]}(v)`` (one policy-evaluation sweep); returns ``min`` and ``max``
-    of ``out - v`` (one pass)."""
-    n = rows.shape[0]
-    n_out = targets.shape[1]
-    lo = np.full(nchunks, np.inf)
-    hi = np.full(nchunks, -np.inf)
-    size = (n + nchunks - 1) // nchunks
-    for c in prange(nchunks):
-        start = c * size
-        end = min(n, start + size)
-        lc = np.inf
-        hc = -np.inf
-        for i in range(start, end):
-            r = rows[i]
-            acc = 0.0
-            for ll in range(n_out):
-                acc += probs[r, ll] * v[targets[r, ll]]
-            q = reward[r] + discount * acc
-            out[i] = q
-            d = q - v[i]
-            lc = min(lc, d)
-            hc = max(hc, d)
-        lo[c] = lc
-        hi[c] = hc
-    return lo.min(), hi.max()
-
-
-@njit(parallel=True, **_OPTS)
-def gather_rows(
-    sel, reward, targets, probs, out_reward, out_targets, out_probs, copy_probs
-):  # pragma: no cover - compiled
-    """Row ``sel[i]`` into slot ``i`` of the ``out_*`` arrays (``out_probs`` only when
-    ``copy_probs``; a shared distribution is not copied)."""
-    n = sel.shape[0]
-    n_out = targets.shape[1]
-    for i in prange(n):
-        r = sel[i]
-        out_reward[i] = reward[r]
-        for ll in range(n_out):
-            out_targets[i, ll] = targets[r, ll]
-        if copy_probs:
-            for ll in range(n_out):
-                out_probs[i, ll] = probs[r, ll]
 
 
 # ---------------------------------------------------------------------- post-decision form
@@ -404,28 +322,3 @@ def ps_policy_stats_coded(
         lo[c] = lc
         hi[c] = hc
     return lo.min(), hi.max()
-
-
-@njit(**_OPTS)
-def check_successors(succ, allow, n):  # pragma: no cover - compiled
-    """Out-of-range successors of an MDP: (count on allowed pairs, first flat index, count
-    elsewhere), for :class:`lpbounds.model.mdp.FiniteMDP`.
-
-    One pass and no temporaries (full-size boolean masks cost GBs at 33 M states).
-    """
-    n_states, n_actions, n_out = succ.shape
-    bad = 0
-    first = -1
-    bad_disallowed = 0
-    for x in range(n_states):
-        for u in range(n_actions):
-            for ll in range(n_out):
-                k = succ[x, u, ll]
-                if k < 0 or k >= n:
-                    if allow[x, u]:
-                        if first < 0:
-                            first = (x * n_actions + u) * n_out + ll
-                        bad += 1
-                    else:
-                        bad_disallowed += 1
-    return bad, first, bad_disallowed

@@ -1,7 +1,9 @@
-"""Which kernels run an operation: plain numpy for small models, compiled (numba) for large.
+"""Which kernels run an operation: plain numpy for small models, compiled for large.
 
-The compiled kernels (:mod:`lpbounds._kernels.compiled`,
-:mod:`lpbounds._kernels.aggregate`) are fast but cost a compile on first use in a fresh
+The row sweeps of exact DP and the successor check are C, built at install
+(:mod:`lpbounds._kernels.native`: :func:`row_sweeps`). The other compiled kernels
+(:mod:`lpbounds._kernels.compiled`, :mod:`lpbounds._kernels.aggregate`, the patrol's
+matrix-free sweeps) are numba's: fast but they cost a compile on first use in a fresh
 environment (about 20 s for a DP solve and an RLP on two cores; numba caches the machine
 code afterwards), and importing numba alone takes a few tenths of a second. Their numpy
 twins (:mod:`lpbounds._kernels.twins`) compute the same numbers with the same arithmetic
@@ -14,12 +16,22 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
 from types import ModuleType
 from typing import Any
 
 from . import twins as _npkernels
 
-__all__ = ["SMALL_READS", "aggregate_kernels", "is_compiled", "nchunks", "sweep_kernels"]
+__all__ = [
+    "SMALL_READS",
+    "aggregate_kernels",
+    "get_threads",
+    "is_compiled",
+    "nchunks",
+    "row_sweeps",
+    "set_threads",
+    "sweep_kernels",
+]
 
 log = logging.getLogger(__name__)
 
@@ -35,9 +47,9 @@ SMALL_READS: int = 200_000
 #: compile is announced. Groups that compile in under a second are not announced.
 _GROUPS: dict[str, tuple[str, tuple[float, float], tuple[str, ...]]] = {
     "rows": (
-        "Bellman-row sweeps",
+        "Bellman-row kernels (Q-values, the game operator, row hashes)",
         (3.0, 6.0),
-        ("q_values", "bellman_max_stats", "policy_sweep_stats", "bellman_maxmin", "gather_rows"),
+        ("q_values", "bellman_maxmin", "hash_rows"),
     ),
     "post-decision": (
         "post-decision sweeps",
@@ -49,7 +61,6 @@ _GROUPS: dict[str, tuple[str, tuple[float, float], tuple[str, ...]]] = {
         (3.0, 8.0),
         ("canonical_rows", "bucket_order", "sort_buckets", "mark_groups", "merge_groups"),
     ),
-    "mdp": ("model checks", (0.3, 0.6), ("check_successors",)),
 }
 _announced: set[str] = set()
 
@@ -70,6 +81,17 @@ def sweep_kernels(reads: int, group: str = "rows") -> ModuleType:
     return _kernels
 
 
+def row_sweeps(reads: int) -> ModuleType:
+    """The improvement and evaluation sweeps of a row system, its policy gather and the
+    successor check, for an operation of ``reads`` values per sweep:
+    :mod:`lpbounds._kernels.twins` or :mod:`lpbounds._kernels.native` (C, no numba)."""
+    if not is_compiled(reads):
+        return _npkernels
+    from . import native
+
+    return native
+
+
 def aggregate_kernels(reads: int) -> ModuleType:
     """The aggregation kernels (:mod:`lpbounds._kernels.aggregate` or their numpy twins)."""
     if not is_compiled(reads):
@@ -81,11 +103,32 @@ def aggregate_kernels(reads: int) -> ModuleType:
 
 
 def nchunks() -> int:
-    """Work chunks of the compiled sweep kernels: a few per numba thread, for load balance
-    (imports numba; the numpy twins ignore the number)."""
-    import numba
+    """Work chunks of the numba kernels: a few per thread, for load balance (the numpy
+    twins and the native sweeps ignore the number)."""
+    return max(1, 8 * get_threads())
 
-    return max(1, 8 * numba.get_num_threads())
+
+def get_threads() -> int:
+    """Threads of the compiled kernels: numba's count once numba is imported (so that
+    ``numba.set_num_threads`` limits lpbounds too), else the native sweeps' (numba's
+    default rule, :func:`lpbounds._kernels.native.default_threads`). Never imports numba."""
+    numba = sys.modules.get("numba")
+    if numba is not None:
+        return int(numba.get_num_threads())
+    from . import native
+
+    return native.get_threads()
+
+
+def set_threads(k: int) -> None:
+    """Run the compiled kernels on ``k`` threads: the native sweeps, and numba's kernels
+    if numba is imported (never imports it)."""
+    from . import native
+
+    native.set_threads(k)
+    numba = sys.modules.get("numba")
+    if numba is not None:
+        numba.set_num_threads(k)
 
 
 def _announce(group: str, module: ModuleType, reads: int) -> None:

@@ -1,5 +1,5 @@
-"""Plain-numpy twins of the compiled kernels of :mod:`lpbounds._kernels.compiled` and
-:mod:`lpbounds._kernels.aggregate`, for small models.
+"""Plain-numpy twins of the compiled kernels of :mod:`lpbounds._kernels.compiled`,
+:mod:`lpbounds._kernels.aggregate` and :mod:`lpbounds._kernels.native`, for small models.
 
 Each function has the name, arguments and outputs of its compiled twin and the same
 arithmetic: a row's value is ``acc = 0.0; acc += probs[r, l] * v[targets[r, l]]`` for
@@ -117,8 +117,12 @@ def bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg, nch
 
 
 def policy_sweep_stats(rows, reward, targets, probs, discount, v, out, nchunks):
-    """``out[i] = q_{rows[i]}(v)``; returns the extremes of ``out - v``."""
-    out[:] = reward[rows] + discount * _expect(targets[rows], np.asarray(probs)[rows], v)
+    """``out[i] = q_{rows[i]}(v)`` (``rows`` None: ``q_i``); returns the extremes of
+    ``out - v``."""
+    if rows is None:
+        out[:] = reward + discount * _expect(targets, probs, v)
+    else:
+        out[:] = reward[rows] + discount * _expect(targets[rows], np.asarray(probs)[rows], v)
     return _extremes(out - v)
 
 

@@ -114,6 +114,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._kernels import dispatch as _kernel_threads
 from ..errors import ConvergenceError, ValidationError
 from ..model.mdp import FiniteMDP
 from ..results import Result, outward_bracket
@@ -763,24 +764,22 @@ SERIAL_SWEEP_READS: int = 1_000_000
 def threads_for(ops: SweepOperator) -> Iterator[None]:
     """Run the enclosed sweeps of ``ops`` on one thread when they are small.
 
-    Below :data:`SERIAL_SWEEP_READS` values read per sweep (``ops.sweep_reads``) numba's
-    thread count is set to 1 for the block and restored after. Only compiled sweeps have
-    threads; numba is not imported for the numpy ones.
+    Below :data:`SERIAL_SWEEP_READS` values read per sweep (``ops.sweep_reads``) the
+    compiled kernels' thread count (:func:`lpbounds._kernels.dispatch.set_threads`) is set
+    to 1 for the block and restored after. Only compiled sweeps have threads.
     """
     if not ops.compiled:
         yield
         return
-    import numba
-
-    before = numba.get_num_threads()
+    before = _kernel_threads.get_threads()
     serial = before > 1 and ops.sweep_reads < SERIAL_SWEEP_READS
     if serial:
-        numba.set_num_threads(1)
+        _kernel_threads.set_threads(1)
     try:
         yield
     finally:
         if serial:
-            numba.set_num_threads(before)
+            _kernel_threads.set_threads(before)
 
 
 #: The pre-protocol private name (lpbounds.formulations.nlp.problem imports it): remove once it
@@ -799,7 +798,8 @@ def _serial_if_small(func: Callable[..., Any]) -> Callable[..., Any]:
 
 
 class ThreadChoice:
-    """One thread or all of numba's for the sweeps of one large solve, chosen by timing.
+    """One thread or all of the compiled kernels' for the sweeps of one large solve, chosen
+    by timing (the count of :func:`lpbounds._kernels.dispatch.set_threads`).
 
     Two threads halve a sweep on an idle 2-core machine, but when other jobs hold the
     cores, a parallel region waits for a descheduled thread and one thread is faster
@@ -830,9 +830,7 @@ class ThreadChoice:
     def __init__(self, ops: SweepOperator) -> None:
         self.many = 1
         if ops.compiled and ops.sweep_reads >= SERIAL_SWEEP_READS:
-            import numba
-
-            self.many = numba.get_num_threads()
+            self.many = _kernel_threads.get_threads()
         self.current = self.many
         self.count: dict[str, int] = {}  # sweeps of each kind so far
         self.times: dict[tuple[str, int], list[float]] = {}
@@ -846,7 +844,7 @@ class ThreadChoice:
         return 2 + self.MANY_SAMPLES
 
     def start(self, kind: str) -> int:
-        """Set numba's thread count for the next sweep of ``kind``; returns it."""
+        """Set the kernels' thread count for the next sweep of ``kind``; returns it."""
         if self.many == 1:
             return 1
         i = self.count.get(kind, 0)
@@ -898,13 +896,11 @@ class ThreadChoice:
 
     def _set(self, k: int) -> None:
         if k != self.current:
-            import numba
-
-            numba.set_num_threads(k)
+            _kernel_threads.set_threads(k)
             self.current = k
 
     def restore(self) -> None:
-        """Back to numba's thread count at the start."""
+        """Back to the kernels' thread count at the start."""
         self._set(self.many)
 
 

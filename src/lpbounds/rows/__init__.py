@@ -123,7 +123,7 @@ class SweepOperator(Protocol):
     discount : float
         ``lambda``.
     compiled : bool
-        True when the sweeps run compiled, multithreaded kernels (numba); False for the
+        True when the sweeps run compiled, multithreaded kernels (C or numba); False for the
         numpy twins, for which no thread count is ever set.
     sweep_reads : int
         Values one sweep reads: sweeps below :data:`lpbounds.dp.SERIAL_SWEEP_READS` run
@@ -492,6 +492,11 @@ class BellmanRows:
         """
         return _backend.sweep_kernels(self.reads)
 
+    def sweeps(self) -> Any:
+        """The sweep module of this system's size: the numpy twins or the native (C) row
+        sweeps, as :func:`lpbounds._kernels.dispatch.row_sweeps` picks them."""
+        return _backend.row_sweeps(self.reads)
+
     def work_chunks(self, nchunks: int | None = None) -> int:
         """Work chunks for the compiled kernels.
 
@@ -503,7 +508,7 @@ class BellmanRows:
         Returns
         -------
         int
-            ``nchunks``, else a few per numba thread (1 for the numpy twins, which ignore it).
+            ``nchunks``, else a few per kernel thread (1 for the numpy twins, which ignore it).
         """
         if nchunks is not None:
             return nchunks
@@ -605,7 +610,7 @@ class BellmanRows:
     ) -> tuple[float, float]:
         """``out = T v``, the first maximising row of each owner in ``arg``; returns the
         min and max of ``out - v`` (``work`` is unused)."""
-        lo, hi = self.kernels().bellman_max_stats(
+        lo, hi = self.sweeps().bellman_max_stats(
             self.indptr, self.reward, self.targets, self.probs, self.discount, v, out, arg,
             self.work_chunks(nchunks),
         )  # fmt: skip
@@ -624,7 +629,7 @@ class BellmanRows:
         """``out[i] = q_{sel[i]}(v)``; returns the min and max of ``out - v``. ``reward``
         replaces the rows' rewards (:meth:`zero_rewards`: ``discount * P_pi v``)."""
         rew = self.reward if reward is None else reward
-        lo, hi = self.kernels().policy_sweep_stats(
+        lo, hi = self.sweeps().policy_sweep_stats(
             sel, rew, self.targets, self.probs, self.discount, v, out, self.work_chunks(nchunks)
         )
         return float(lo), float(hi)
@@ -780,7 +785,6 @@ class PackedSweeps(PolicySweeps):
         n, n_out = ops.n_vars, ops.n_outcomes
         probs = np.asarray(ops.probs)
         self.shared = probs.ndim == 2 and probs.strides[0] == 0
-        self.index = np.arange(n, dtype=np.int64)
         self.reward = np.empty(n)
         self.targets = np.empty((n, n_out), dtype=ops.targets.dtype)
         self.probs = probs[:n] if self.shared else np.empty((n, n_out))
@@ -791,7 +795,7 @@ class PackedSweeps(PolicySweeps):
     def set_policy(self, arg: np.ndarray) -> None:
         """Gather the rows ``arg`` (one per owner) into the packed arrays."""
         rows = self.rows
-        rows.kernels().gather_rows(
+        rows.sweeps().gather_rows(
             arg, rows.reward, rows.targets, rows.probs, self.reward, self.targets,
             self._probs_out, not self.shared,
         )  # fmt: skip
@@ -799,8 +803,8 @@ class PackedSweeps(PolicySweeps):
     def sweep(self, v: np.ndarray, out: np.ndarray) -> tuple[float, float]:
         """``out = T_pi v`` on the packed rows; returns the min and max of ``out - v``."""
         rows = self.rows
-        lo, hi = rows.kernels().policy_sweep_stats(
-            self.index, self.reward, self.targets, self.probs, rows.discount, v, out,
+        lo, hi = rows.sweeps().policy_sweep_stats(
+            None, self.reward, self.targets, self.probs, rows.discount, v, out,
             rows.work_chunks(self.nchunks),
         )  # fmt: skip
         return float(lo), float(hi)
@@ -943,7 +947,7 @@ class PostDecisionRows:
         Returns
         -------
         int
-            ``nchunks``, else a few per numba thread (1 for the numpy twins, which ignore it).
+            ``nchunks``, else a few per kernel thread (1 for the numpy twins, which ignore it).
         """
         if nchunks is not None:
             return nchunks
@@ -1119,7 +1123,7 @@ def _check_every_partition_kept(mdp: FiniteMDP, partition: Partition, owner: np.
 
 def _nchunks() -> int:
     """Work chunks of the compiled sweep kernels: a few per thread, for load balance
-    (imports numba: call it for compiled operations only)."""
+    (call it for compiled operations only)."""
     return _backend.nchunks()
 
 

@@ -1,0 +1,188 @@
+"""The Bellman-row sweeps compiled ahead of time, run on threads.
+
+The hot loops of exact DP on a row system (:class:`lpbounds.rows.BellmanRows`: the
+improvement sweep, the policy-evaluation sweep, the gather of a policy's rows) and the
+successor check of :class:`~lpbounds.model.mdp.FiniteMDP` are C functions in
+:mod:`lpbounds._kernels.rowsweeps`, built when lpbounds is installed. Each works on one
+range of owners and releases the GIL; the functions here split the owners into one range
+per thread (equal shares of rows), run the first range on the calling thread and the
+others on a pool, and combine the ranges' extremes (exact minima and maxima, so the
+split changes no number).
+
+Why not numba, like the other compiled kernels (:mod:`lpbounds._kernels.compiled`): a
+process that solves one mid-size model pays about 0.2 s to import numba and 0.3-0.4 s
+for its first call of a cached kernel (its typing and target registries, and an import
+of :mod:`scipy.linalg` for its BLAS check) — more than the solve of a 256,000-state model
+takes, and as much as a whole plain-scipy solve of it (``docs/benchmarks.md``, "Peers:
+exact DP"). These sweeps need neither, and run faster than their numba versions did
+(2.9 against 4.9 ms for an improvement sweep of the 256,000 x 3 x 5 garnet on two
+threads: the loop over a shared distribution's outcomes is unrolled).
+
+The arithmetic is that of the numpy twins (:mod:`lpbounds._kernels.twins`), so the
+numbers are bit-identical to theirs and to what the numba versions gave
+(``tests/test_fast_paths.py``). The thread count is :func:`get_threads` (numba's
+default rule: ``NUMBA_NUM_THREADS`` if set, else the CPUs this process may run on);
+:func:`lpbounds._kernels.dispatch.set_threads` sets it with numba's.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import wait as _wait
+from typing import Any
+
+import numpy as np
+
+try:
+    from . import rowsweeps as _c
+except ImportError as exc:  # pragma: no cover - a source tree without the build
+    raise ImportError(
+        "lpbounds' compiled row sweeps (lpbounds._kernels.rowsweeps) are not built: "
+        "install lpbounds with pip (`pip install -e .` in a checkout), which compiles them"
+    ) from exc
+
+__all__ = [
+    "bellman_max_stats",
+    "check_successors",
+    "default_threads",
+    "gather_rows",
+    "get_threads",
+    "policy_sweep_stats",
+    "set_threads",
+]
+
+
+def default_threads() -> int:
+    """numba's default thread count: ``NUMBA_NUM_THREADS``, else the usable CPUs."""
+    env = os.environ.get("NUMBA_NUM_THREADS", "").strip()
+    if env.isdigit() and int(env) > 0:
+        return int(env)
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - no sched_getaffinity (macOS, Windows)
+        return max(1, os.cpu_count() or 1)
+
+
+_threads: int | None = None  # None: default_threads()
+_pool: ThreadPoolExecutor | None = None
+_pool_pid = -1  # the process that made the pool (a forked child makes its own)
+
+
+def get_threads() -> int:
+    """Threads the sweeps of this module use."""
+    return default_threads() if _threads is None else _threads
+
+
+def set_threads(k: int) -> None:
+    """Use ``k`` threads (1 to :func:`default_threads`, as numba allows)."""
+    global _threads
+    limit = default_threads()
+    if not 1 <= int(k) <= limit:
+        raise ValueError(f"threads must be between 1 and {limit}; got {k}")
+    _threads = int(k)
+
+
+def _workers() -> ThreadPoolExecutor:
+    """The pool of the ranges after the first (made once per process)."""
+    global _pool, _pool_pid
+    if _pool is None or _pool_pid != os.getpid():
+        _pool = ThreadPoolExecutor(
+            max_workers=max(1, default_threads() - 1), thread_name_prefix="lpbounds-sweep"
+        )
+        _pool_pid = os.getpid()
+    return _pool
+
+
+def _run(func: Callable[..., Any], args: tuple[Any, ...], bounds: np.ndarray) -> list[Any]:
+    """``func(*args, start, end)`` for each consecutive pair of ``bounds``; results in order.
+
+    The first range runs here, the others on the pool; all are waited for before this
+    returns or raises (a Ctrl-C while they run leaves no thread writing into the arrays).
+    """
+    edges = [int(b) for b in bounds]
+    if len(edges) <= 2:
+        return [func(*args, edges[0], edges[-1])]
+    pool = _workers()
+    futures: list[Future[Any]] = [
+        pool.submit(func, *args, a, b) for a, b in itertools.pairwise(edges[1:])
+    ]
+    try:
+        first = func(*args, edges[0], edges[1])
+    finally:
+        _wait(futures)
+    return [first, *(f.result() for f in futures)]
+
+
+def _split(n: int, indptr: np.ndarray | None = None) -> np.ndarray:
+    """Range bounds over ``n`` owners, one range per thread: equal numbers of rows
+    (``indptr``) or of owners."""
+    k = min(get_threads(), max(1, n))
+    share = np.arange(k + 1, dtype=np.int64)
+    if indptr is None:
+        return share * n // k
+    # integer targets: a float array would make searchsorted convert all of indptr
+    cuts = np.searchsorted(indptr, share * int(indptr[-1]) // k)
+    cuts[0], cuts[-1] = 0, n
+    return np.maximum.accumulate(np.clip(cuts, 0, n))
+
+
+def _i8(a: Any) -> np.ndarray:
+    """An index input as the C functions read it (no copy when it already is one)."""
+    return np.ascontiguousarray(a, dtype=np.int64)
+
+
+def _f8(a: Any) -> np.ndarray:
+    """A float input as the C functions read it (no copy when it already is one)."""
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _extremes(pairs: list[tuple[float, float]]) -> tuple[float, float]:
+    return min(p[0] for p in pairs), max(p[1] for p in pairs)
+
+
+def bellman_max_stats(
+    indptr: np.ndarray, reward: np.ndarray, targets: np.ndarray, probs: np.ndarray,
+    discount: float, v: np.ndarray, out: np.ndarray, arg: np.ndarray, nchunks: int = 0,
+) -> tuple[float, float]:  # fmt: skip
+    """``out[i] = max_r q_r`` over owner ``i``'s rows, ``arg[i]`` the first maximising row;
+    returns the min and max of ``out - v`` (``nchunks`` is ignored: one range per thread)."""
+    indptr = _i8(indptr)
+    args = (indptr, _f8(reward), targets, probs, float(discount), _f8(v), out, arg)
+    return _extremes(_run(_c.bellman_max_stats, args, _split(indptr.shape[0] - 1, indptr)))
+
+
+def policy_sweep_stats(
+    rows: np.ndarray | None, reward: np.ndarray, targets: np.ndarray, probs: np.ndarray,
+    discount: float, v: np.ndarray, out: np.ndarray, nchunks: int = 0,
+) -> tuple[float, float]:  # fmt: skip
+    """``out[i] = q_{rows[i]}(v)`` (one policy-evaluation sweep; ``rows`` None: ``q_i``, the
+    rows packed one per owner); returns the min and max of ``out - v`` (``nchunks`` is
+    ignored). Raises IndexError for an entry of ``rows`` that is not a row."""
+    rows = None if rows is None else _i8(rows)
+    n = out.shape[0] if rows is None else rows.shape[0]
+    args = (rows, _f8(reward), targets, probs, float(discount), _f8(v), out)
+    return _extremes(_run(_c.policy_sweep_stats, args, _split(n)))
+
+
+def gather_rows(
+    sel: np.ndarray, reward: np.ndarray, targets: np.ndarray, probs: np.ndarray,
+    out_reward: np.ndarray, out_targets: np.ndarray, out_probs: np.ndarray, copy_probs: bool,
+) -> None:  # fmt: skip
+    """Row ``sel[i]`` into slot ``i`` of the ``out_*`` arrays (``out_probs`` only when
+    ``copy_probs``; a shared distribution is not copied)."""
+    sel = _i8(sel)
+    args = (sel, _f8(reward), targets, probs, out_reward, out_targets, out_probs, bool(copy_probs))
+    _run(_c.gather_rows, args, _split(sel.shape[0]))
+
+
+def check_successors(succ: np.ndarray, allow: np.ndarray, n: int) -> tuple[int, int, int]:
+    """Out-of-range successors of an MDP: (count on allowed pairs, first flat index, count
+    elsewhere), for :class:`lpbounds.model.mdp.FiniteMDP`; one pass, no temporaries (but a
+    C-contiguous copy of a strided ``succ``)."""
+    succ, allow = np.ascontiguousarray(succ), np.ascontiguousarray(allow, dtype=np.bool_)
+    parts = _run(_c.check_successors, (succ, allow, int(n)), _split(succ.shape[0]))
+    firsts = [p[1] for p in parts if p[1] >= 0]
+    return sum(p[0] for p in parts), (firsts[0] if firsts else -1), sum(p[2] for p in parts)
