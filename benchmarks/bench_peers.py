@@ -526,24 +526,21 @@ AT_TARGET = ", tol=1e-10 * mdp.reward_absmax / (1 - mdp.discount)"
 
 #: lpbounds' whole process on the mid-size garnet, stage by stage (seconds)
 STARTUP = """
-import time, json, os
+import time, json, os, sys
 t0 = time.perf_counter()
 import numpy as np
 t1 = time.perf_counter()
 import lpbounds as lb
 t2 = time.perf_counter()
-import numba
+from lpbounds._kernels import native  # the C row sweeps (the garnet's own check loads them)
 t3 = time.perf_counter()
-from lpbounds._kernels import compiled
-compiled.check_successors(np.zeros((8, 1, 1), np.int32), np.ones((8, 1), bool), 8)
-t4 = time.perf_counter()
 mdp = lb.garnet(256_000, 3, 5, 0.9, seed=2048, shared_probabilities=True)
-t5 = time.perf_counter()
+t4 = time.perf_counter()
 r = lb.solve_exact(mdp, tol=1e-10 * mdp.reward_absmax / (1 - mdp.discount))
-t6 = time.perf_counter()
-print(json.dumps({"numpy": t1 - t0, "import lpbounds": t2 - t1, "import numba": t3 - t2,
-                  "numba's first call": t4 - t3, "garnet": t5 - t4, "solve": t6 - t5,
-                  "load": os.getloadavg()[0]}))
+t5 = time.perf_counter()
+assert "numba" not in sys.modules, "the mid-size solve imported numba"
+print(json.dumps({"numpy": t1 - t0, "import lpbounds": t2 - t1, "the C sweeps": t3 - t2,
+                  "garnet": t4 - t3, "solve": t5 - t4, "load": os.getloadavg()[0]}))
 """
 
 
@@ -736,13 +733,12 @@ process each, medians of {len(runs)}; seconds):
 |{"---|" * len(stages)}
 | {cells} |
 
-numba's first call of a cached kernel initialises its CPU target (its typing and lowering
-registries, and `scipy.linalg`, which numba imports to find BLAS): a fixed cost of every
-process that runs a compiled kernel (the two numba columns), close to the plain scipy
-script's whole run in the table above: the whole-process target at this size is out of
-reach while the sweeps are numba's. What
-was cut: `scipy.sparse` is no longer imported at start-up (0.08-0.14 s; it is imported
-where a matrix is built).
+The process imports no numba (the script asserts it): the row sweeps, their policy gather
+and the model's successor check are C (`lpbounds._kernels.native`). What was cut: numba's
+import (0.16-0.20 s) and its first call of a cached kernel (0.32-0.42 s: it initialises its
+CPU target, its typing and lowering registries, and imports `scipy.linalg`, where it looks
+for BLAS), which together cost about what the plain scipy script's whole run costs; and
+earlier, `scipy.sparse` at start-up (0.08-0.14 s; it is imported where a matrix is built).
 """
 
 
