@@ -7,7 +7,7 @@
  *     acc = 0.0;  acc += probs[r, l] * v[targets[r, l]]   for l = 0 .. L-1, in order;
  *     q_r = reward[r] + discount * acc
  *
- * with no fused multiply-add (built with -ffp-contract=off, see pyproject.toml) and no
+ * with no fused multiply-add (built with -ffp-contract=off, see setup.py) and no
  * reassociation, so every number is bit-identical to theirs (tests/test_fast_paths.py).
  * The first maximising row of an owner is kept (strict >); the extremes of out - v are
  * exact minima and maxima, whatever the ranges.

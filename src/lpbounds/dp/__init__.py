@@ -114,7 +114,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .._kernels import dispatch as _kernel_threads
+from .._kernels import dispatch as _backend
 from ..errors import ConvergenceError, ValidationError
 from ..model.mdp import FiniteMDP
 from ..results import Result, outward_bracket
@@ -771,15 +771,15 @@ def threads_for(ops: SweepOperator) -> Iterator[None]:
     if not ops.compiled:
         yield
         return
-    before = _kernel_threads.get_threads()
+    before = _backend.get_threads()
     serial = before > 1 and ops.sweep_reads < SERIAL_SWEEP_READS
     if serial:
-        _kernel_threads.set_threads(1)
+        _backend.set_threads(1)
     try:
         yield
     finally:
         if serial:
-            _kernel_threads.set_threads(before)
+            _backend.set_threads(before)
 
 
 #: The pre-protocol private name (lpbounds.formulations.nlp.problem imports it): remove once it
@@ -830,7 +830,7 @@ class ThreadChoice:
     def __init__(self, ops: SweepOperator) -> None:
         self.many = 1
         if ops.compiled and ops.sweep_reads >= SERIAL_SWEEP_READS:
-            self.many = _kernel_threads.get_threads()
+            self.many = _backend.get_threads()
         self.current = self.many
         self.count: dict[str, int] = {}  # sweeps of each kind so far
         self.times: dict[tuple[str, int], list[float]] = {}
@@ -896,7 +896,7 @@ class ThreadChoice:
 
     def _set(self, k: int) -> None:
         if k != self.current:
-            _kernel_threads.set_threads(k)
+            _backend.set_threads(k)
             self.current = k
 
     def restore(self) -> None:
