@@ -610,7 +610,8 @@ def solve_exact(
     initial : array_like, optional
         Starting vector (default 0).
     evaluation : {"auto", "direct", "iterative"}
-        Policy iteration's evaluation: sparse LU, sweeps, or LU up to 200,000 states.
+        Policy iteration's evaluation: sparse LU, sweeps, or LU up to 200,000 states
+        (LU fills in on a random transition graph: see :func:`evaluate_policy`).
     callback : callable(iteration, residual), optional
         Called after each improvement step (progress bars).
     raise_on_failure : bool
@@ -1354,7 +1355,11 @@ def evaluate_policy(
         Actions per state (MDP) or rows per owner (row system).
     method : {"auto", "direct", "iterative"}
         Sparse LU (scipy's SuperLU), extrapolated sweeps to ``tol``, or LU up to
-        200,000 states and sweeps beyond.
+        200,000 states and sweeps beyond. LU's cost is its fill-in, which the structure
+        decides: near-banded chains (the patrol, pymdptoolbox's forest) factor in
+        milliseconds, a random transition graph fills in (a 10,000-state garnet's policy:
+        LU 20 s, sweeps 15 ms; 2,000 states: 0.4 s and 4 ms): pass
+        ``method="iterative"`` for such a model.
     tol : float, optional
         Residual target of the iterative method (default as in :func:`solve_exact`).
 
