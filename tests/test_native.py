@@ -9,6 +9,9 @@ built on them are compared in ``tests/test_fast_paths.py``.
 
 from __future__ import annotations
 
+import multiprocessing
+import os
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -198,3 +201,21 @@ def test_thread_count_is_shared_with_numba():
     assert dispatch.get_threads() == before
     with pytest.raises(ValueError, match="threads"):
         native.set_threads(native.default_threads() + 1)
+
+
+def _sweep_in_child(n: int) -> float:
+    native.set_threads(min(2, native.default_threads()))
+    indptr, reward, targets, probs, v = random_rows(n, 3, 5, True, False, seed=4)
+    out, arg = np.empty(n), np.empty(n, dtype=np.int64)
+    return native.bellman_max_stats(indptr, reward, targets, probs, 0.9, v, out, arg)[1]
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork on this platform")
+def test_a_forked_child_makes_its_own_pool():
+    """The pool's threads do not survive a fork: a child that reused the parent's pool would
+    wait for ever on the range it submitted. It makes its own (and gets the same number)."""
+    want = _sweep_in_child(5_000)  # the parent's pool now exists
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(1) as pool:
+        got = pool.apply_async(_sweep_in_child, (5_000,)).get(timeout=120)
+    assert got == want
