@@ -171,6 +171,9 @@ def test_native_sweeps_refuse_what_they_cannot_read():
         C.bellman_max_stats(indptr, reward, targets, probs, 0.9, v, ro, arg, 0, 10)
     with pytest.raises(TypeError, match="targets"):
         C.bellman_max_stats(indptr, reward, targets.astype(float), probs, 0.9, v, out, arg, 0, 10)
+    with pytest.raises(TypeError, match="v"):  # the other byte order: not read as numbers
+        swapped = v.astype(v.dtype.newbyteorder())
+        C.bellman_max_stats(indptr, reward, targets, probs, 0.9, swapped, out, arg, 0, 10)
     with pytest.raises(ValueError, match="range"):
         C.bellman_max_stats(indptr, reward, targets, probs, 0.9, v, out, arg, 0, 11)
     with pytest.raises(IndexError, match=r"rows\[3\] = 99"):

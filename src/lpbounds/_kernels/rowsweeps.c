@@ -28,10 +28,12 @@ typedef struct {
     int held;
 } Buf;
 
-/* 'f' float64, 'i' signed integer, 'b' bool; -1 for anything else */
+/* 'f' float64, 'i' signed integer, 'b' bool, in native byte order; -1 for anything else */
 static int kind_of(const Py_buffer *b) {
     const char *f = b->format ? b->format : "B";
-    while (*f == '@' || *f == '=' || *f == '<')
+    const uint16_t one = 1;
+    const char native_order = *(const char *)&one ? '<' : '>';
+    while (*f == '@' || *f == '=' || *f == native_order)
         f++;
     if (f[0] == '\0' || f[1] != '\0')
         return -1;
