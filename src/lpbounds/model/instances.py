@@ -25,10 +25,11 @@ loaded for its partition-level bounds.
 from __future__ import annotations
 
 import importlib
+import math
 import os
 import stat
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -68,6 +69,7 @@ __all__ = [
     "gymnasium_model",
     "inventory",
     "load_instance",
+    "model_toml",
     "models_dir",
     "packaged_models_dir",
     "resolve_instance_path",
@@ -373,3 +375,59 @@ def _build_labels_partition(table: Mapping[str, Any], instance: Instance) -> Par
             f"[partition] labels has {part.n_states} entries; the model has {n} states"
         )
     return part
+
+
+# ---------------------------------------------------------------------- writing
+def _toml_value(a: Any) -> str:
+    """A nested TOML array (floats written as Python's shortest round-trip repr)."""
+    if a.ndim == 0:
+        t = a.item()
+        if isinstance(t, bool):
+            return "true" if t else "false"
+        if isinstance(t, int):
+            return str(t)
+        return repr(float(t)) if math.isfinite(t) else ("nan" if t != t else str(t))
+    return "[" + ", ".join(_toml_value(t) for t in a) + "]"
+
+
+def model_toml(mdp: FiniteMDP, partition: Partition, header: Sequence[str] = ()) -> str:
+    """The instance as the text of an instance file (``kind = "explicit"``).
+
+    Parameters
+    ----------
+    mdp, partition
+        The instance (rewards as stored: the reward-maximising form).
+    header : sequence of str
+        Comment lines written first (each prefixed with ``# ``).
+
+    Returns
+    -------
+    str
+        ``[model]`` with ``successors[x][u][l]``, ``probabilities`` (``[l]`` or
+        ``[x][u][l]``), ``rewards[x][u]`` (0 on disallowed pairs), ``discount`` and
+        ``allowed[x][u]`` when some pair is disallowed; ``[partition]`` with ``labels``.
+        Read back by :func:`load_instance`, it gives the same arrays bit for bit (the
+        writer of :mod:`lpbounds.studies.shrink`'s counterexample files).
+    """
+    import numpy as np
+
+    rewards = np.where(mdp.allowed, mdp.rewards, 0.0)
+    lines = [f"# {h}" for h in header]
+    lines += [
+        "[model]",
+        'kind = "explicit"',
+        f"discount = {_toml_value(np.asarray(float(mdp.discount)))}",
+        "# successors[x][u][l] = f(x, u, Y_l)",
+        f"successors = {_toml_value(np.asarray(mdp.successors, dtype=np.int64))}",
+        f"probabilities = {_toml_value(np.asarray(mdp.probabilities, dtype=np.float64))}",
+        f"rewards = {_toml_value(rewards)}",
+    ]
+    if not mdp.allowed.all():
+        lines.append(f"allowed = {_toml_value(np.asarray(mdp.allowed, dtype=bool))}")
+    lines += [
+        "",
+        "[partition]",
+        'kind = "labels"',
+        f"labels = {_toml_value(np.asarray(partition.labels, dtype=np.int64))}",
+    ]
+    return "\n".join(lines) + "\n"

@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ValidationError
+from ..model.instances import model_toml
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
 from ..outputs import write_text_atomic
@@ -328,59 +329,6 @@ def shrink(
 
 
 # ---------------------------------------------------------------------- instance files
-def _toml_value(a: np.ndarray) -> str:
-    """A nested TOML array (floats written as Python's shortest round-trip repr)."""
-    if a.ndim == 0:
-        t = a.item()
-        if isinstance(t, bool):
-            return "true" if t else "false"
-        if isinstance(t, int):
-            return str(t)
-        return repr(float(t)) if math.isfinite(t) else ("nan" if t != t else str(t))
-    return "[" + ", ".join(_toml_value(t) for t in a) + "]"
-
-
-def model_toml(mdp: FiniteMDP, partition: Partition, header: Sequence[str] = ()) -> str:
-    """The instance as the text of an instance file (``kind = "explicit"``).
-
-    Parameters
-    ----------
-    mdp, partition
-        The instance (rewards as stored: the reward-maximising form).
-    header : sequence of str
-        Comment lines written first (each prefixed with ``# ``).
-
-    Returns
-    -------
-    str
-        ``[model]`` with ``successors[x][u][l]``, ``probabilities`` (``[l]`` or
-        ``[x][u][l]``), ``rewards[x][u]`` (0 on disallowed pairs), ``discount`` and
-        ``allowed[x][u]`` when some pair is disallowed; ``[partition]`` with ``labels``.
-        Read back by :func:`lpbounds.model.instances.load_instance`, it gives the same
-        arrays bit for bit.
-    """
-    rewards = np.where(mdp.allowed, mdp.rewards, 0.0)
-    lines = [f"# {h}" for h in header]
-    lines += [
-        "[model]",
-        'kind = "explicit"',
-        f"discount = {_toml_value(np.asarray(float(mdp.discount)))}",
-        "# successors[x][u][l] = f(x, u, Y_l)",
-        f"successors = {_toml_value(np.asarray(mdp.successors, dtype=np.int64))}",
-        f"probabilities = {_toml_value(np.asarray(mdp.probabilities, dtype=np.float64))}",
-        f"rewards = {_toml_value(rewards)}",
-    ]
-    if not mdp.allowed.all():
-        lines.append(f"allowed = {_toml_value(np.asarray(mdp.allowed, dtype=bool))}")
-    lines += [
-        "",
-        "[partition]",
-        'kind = "labels"',
-        f"labels = {_toml_value(np.asarray(partition.labels, dtype=np.int64))}",
-    ]
-    return "\n".join(lines) + "\n"
-
-
 def write_model(
     path: str | Path, mdp: FiniteMDP, partition: Partition, header: Sequence[str] = ()
 ) -> Path:
