@@ -62,7 +62,7 @@ def max_both(indptr, reward, targets, probs, lam, v):
     got = []
     for mod in (T, native):
         out, arg = np.full(n, np.nan), np.full(n, -7, dtype=np.int64)
-        lo, hi = mod.bellman_max_stats(indptr, reward, targets, probs, lam, v, out, arg, 4)
+        lo, hi = mod.bellman_max_stats(indptr, reward, targets, probs, lam, v, out, arg)
         got.append((out, arg, float(lo), float(hi)))
     return got
 
@@ -124,7 +124,7 @@ def test_property_native_policy_sweep_and_gather_equal_twins(n, n_out, shared, t
     res = []
     for mod in (T, native):
         out = np.full(n, np.nan)
-        lo, hi = mod.policy_sweep_stats(sel, reward, targets, probs, 0.95, v, out, 4)
+        lo, hi = mod.policy_sweep_stats(sel, reward, targets, probs, 0.95, v, out)
         g_rew, g_t = np.empty(n), np.empty((n, n_out), dtype=targets.dtype)
         g_p = np.empty((n, n_out))
         mod.gather_rows(sel, reward, targets, probs, g_rew, g_t, g_p, not shared)
@@ -138,7 +138,7 @@ def test_property_native_policy_sweep_and_gather_equal_twins(n, n_out, shared, t
     packed_p = np.broadcast_to(probs[0], (n, n_out)) if shared else pb
     for mod in (T, native):
         out = np.full(n, np.nan)
-        lo, hi = mod.policy_sweep_stats(None, rb, tb, packed_p, 0.95, v, out, 4)
+        lo, hi = mod.policy_sweep_stats(None, rb, tb, packed_p, 0.95, v, out)
         assert np.array_equal(bits(out), bits(ob)) and (float(lo), float(hi)) == (lb_, hb)
 
 

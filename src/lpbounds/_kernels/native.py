@@ -145,10 +145,10 @@ def _extremes(pairs: list[tuple[float, float]]) -> tuple[float, float]:
 
 def bellman_max_stats(
     indptr: np.ndarray, reward: np.ndarray, targets: np.ndarray, probs: np.ndarray,
-    discount: float, v: np.ndarray, out: np.ndarray, arg: np.ndarray, nchunks: int = 0,
+    discount: float, v: np.ndarray, out: np.ndarray, arg: np.ndarray,
 ) -> tuple[float, float]:  # fmt: skip
     """``out[i] = max_r q_r`` over owner ``i``'s rows, ``arg[i]`` the first maximising row;
-    returns the min and max of ``out - v`` (``nchunks`` is ignored: one range per thread)."""
+    returns the min and max of ``out - v`` (one range of owners per thread)."""
     indptr = _i8(indptr)
     args = (indptr, _f8(reward), targets, probs, float(discount), _f8(v), out, arg)
     return _extremes(_run(_c.bellman_max_stats, args, _split(indptr.shape[0] - 1, indptr)))
@@ -156,11 +156,11 @@ def bellman_max_stats(
 
 def policy_sweep_stats(
     rows: np.ndarray | None, reward: np.ndarray, targets: np.ndarray, probs: np.ndarray,
-    discount: float, v: np.ndarray, out: np.ndarray, nchunks: int = 0,
+    discount: float, v: np.ndarray, out: np.ndarray,
 ) -> tuple[float, float]:  # fmt: skip
     """``out[i] = q_{rows[i]}(v)`` (one policy-evaluation sweep; ``rows`` None: ``q_i``, the
-    rows packed one per owner); returns the min and max of ``out - v`` (``nchunks`` is
-    ignored). Raises IndexError for an entry of ``rows`` that is not a row."""
+    rows packed one per owner); returns the min and max of ``out - v``. Raises IndexError
+    for an entry of ``rows`` that is not a row."""
     rows = None if rows is None else _i8(rows)
     n = out.shape[0] if rows is None else rows.shape[0]
     args = (rows, _f8(reward), targets, probs, float(discount), _f8(v), out)

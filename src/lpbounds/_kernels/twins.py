@@ -106,7 +106,7 @@ def hash_rows(owner, action, targets, probbits, out):
     out[:] = h
 
 
-def bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg, nchunks):
+def bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg):
     """``out[i] = max_r q_r`` over owner ``i``'s rows, ``arg[i]`` the first maximising row;
     returns the extremes of ``out - v``."""
     q = _q(reward, targets, probs, discount, v)
@@ -116,7 +116,7 @@ def bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg, nch
     return _extremes(out - v)
 
 
-def policy_sweep_stats(rows, reward, targets, probs, discount, v, out, nchunks):
+def policy_sweep_stats(rows, reward, targets, probs, discount, v, out):
     """``out[i] = q_{rows[i]}(v)`` (``rows`` None: ``q_i``); returns the extremes of
     ``out - v``."""
     if rows is None:

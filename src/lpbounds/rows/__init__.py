@@ -71,8 +71,9 @@ iterative policy evaluation) run on any :class:`SweepOperator`: :class:`BellmanR
 :class:`PostDecisionRows` and the matrix-free patrol operator
 (:class:`lpbounds.patrol.matrix_free.MatrixFreePatrol`) implement it. A sweep writes
 ``T v`` (or ``T_pi v``) into ``out`` and returns the extremes of ``out - v``; the work
-chunks of the compiled kernels are the operator's choice unless ``nchunks`` is given
-(they change no number: every state's value is computed alone and the extremes are exact),
+chunks of the numba kernels are the operator's choice unless ``nchunks`` is given (the C
+row sweeps of :class:`BellmanRows` take one range per thread and ignore it; neither
+changes a number: every state's value is computed alone and the extremes are exact),
 and ``work`` is the operator's scratch array from :meth:`SweepOperator.new_work`, made once
 per solve and passed to each of its sweeps.
 """
@@ -497,23 +498,6 @@ class BellmanRows:
         sweeps, as :func:`lpbounds._kernels.dispatch.row_sweeps` picks them."""
         return _backend.row_sweeps(self.reads)
 
-    def work_chunks(self, nchunks: int | None = None) -> int:
-        """Work chunks for the compiled kernels.
-
-        Parameters
-        ----------
-        nchunks : int, optional
-            Returned as is when given.
-
-        Returns
-        -------
-        int
-            ``nchunks``, else a few per kernel thread (1 for the numpy twins, which ignore it).
-        """
-        if nchunks is not None:
-            return nchunks
-        return _nchunks() if self.compiled else 1
-
     def __repr__(self) -> str:
         return (
             f"BellmanRows(n_vars={self.n_vars}, n_rows={self.n_rows}, "
@@ -609,11 +593,11 @@ class BellmanRows:
         nchunks: int | None = None,
     ) -> tuple[float, float]:
         """``out = T v``, the first maximising row of each owner in ``arg``; returns the
-        min and max of ``out - v`` (``work`` is unused)."""
+        min and max of ``out - v`` (``work`` and ``nchunks`` are unused: the row sweeps
+        split the owners one range per thread)."""
         lo, hi = self.sweeps().bellman_max_stats(
-            self.indptr, self.reward, self.targets, self.probs, self.discount, v, out, arg,
-            self.work_chunks(nchunks),
-        )  # fmt: skip
+            self.indptr, self.reward, self.targets, self.probs, self.discount, v, out, arg
+        )
         return float(lo), float(hi)
 
     def sweep_policy(
@@ -627,10 +611,11 @@ class BellmanRows:
         reward: np.ndarray | None = None,
     ) -> tuple[float, float]:
         """``out[i] = q_{sel[i]}(v)``; returns the min and max of ``out - v``. ``reward``
-        replaces the rows' rewards (:meth:`zero_rewards`: ``discount * P_pi v``)."""
+        replaces the rows' rewards (:meth:`zero_rewards`: ``discount * P_pi v``);
+        ``work`` and ``nchunks`` are unused, as in :meth:`sweep_max`."""
         rew = self.reward if reward is None else reward
         lo, hi = self.sweeps().policy_sweep_stats(
-            sel, rew, self.targets, self.probs, self.discount, v, out, self.work_chunks(nchunks)
+            sel, rew, self.targets, self.probs, self.discount, v, out
         )
         return float(lo), float(hi)
 
@@ -804,9 +789,8 @@ class PackedSweeps(PolicySweeps):
         """``out = T_pi v`` on the packed rows; returns the min and max of ``out - v``."""
         rows = self.rows
         lo, hi = rows.sweeps().policy_sweep_stats(
-            None, self.reward, self.targets, self.probs, rows.discount, v, out,
-            rows.work_chunks(self.nchunks),
-        )  # fmt: skip
+            None, self.reward, self.targets, self.probs, rows.discount, v, out
+        )
         return float(lo), float(hi)
 
 
