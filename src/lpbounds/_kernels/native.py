@@ -123,10 +123,11 @@ def _split(n: int, indptr: np.ndarray | None = None) -> np.ndarray:
     share = np.arange(k + 1, dtype=np.int64)
     if indptr is None:
         return share * n // k
-    # integer targets: a float array would make searchsorted convert all of indptr
+    # integer targets: a float array would make searchsorted convert all of indptr; the
+    # targets below indptr[-1] give owners in [0, n], in order
     cuts = np.searchsorted(indptr, share * int(indptr[-1]) // k)
     cuts[0], cuts[-1] = 0, n
-    return np.maximum.accumulate(np.clip(cuts, 0, n))
+    return cuts
 
 
 def _i8(a: Any) -> np.ndarray:
