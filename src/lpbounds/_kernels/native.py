@@ -20,21 +20,17 @@ threads: the loop over a shared distribution's outcomes is unrolled).
 
 The arithmetic is that of the numpy twins (:mod:`lpbounds._kernels.twins`), so the
 numbers are bit-identical to theirs and to what the numba versions gave
-(``tests/test_fast_paths.py``). The thread count is :func:`get_threads` (numba's
-default rule: ``NUMBA_NUM_THREADS`` if set, else the CPUs this process may run on);
-:func:`lpbounds._kernels.dispatch.set_threads` sets it with numba's.
+(``tests/test_fast_paths.py``). Threads, ranges and the pool are
+:mod:`lpbounds._kernels.threads`' (``get_threads`` / ``set_threads`` are re-exported here).
 """
 
 from __future__ import annotations
 
-import itertools
-import os
-from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
-from concurrent.futures import wait as _wait
 from typing import Any
 
 import numpy as np
+
+from .threads import default_threads, get_threads, run_ranges, set_threads, split_ranges
 
 try:
     from . import rowsweeps as _c
@@ -53,81 +49,6 @@ __all__ = [
     "policy_sweep_stats",
     "set_threads",
 ]
-
-
-def default_threads() -> int:
-    """numba's default thread count: ``NUMBA_NUM_THREADS``, else the usable CPUs."""
-    env = os.environ.get("NUMBA_NUM_THREADS", "").strip()
-    if env.isdigit() and int(env) > 0:
-        return int(env)
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - no sched_getaffinity (macOS, Windows)
-        return max(1, os.cpu_count() or 1)
-
-
-_threads: int | None = None  # None: default_threads()
-_pool: ThreadPoolExecutor | None = None
-_pool_pid = -1  # the process that made the pool (a forked child makes its own)
-
-
-def get_threads() -> int:
-    """Threads the sweeps of this module use."""
-    return default_threads() if _threads is None else _threads
-
-
-def set_threads(k: int) -> None:
-    """Use ``k`` threads (1 to :func:`default_threads`, as numba allows)."""
-    global _threads
-    limit = default_threads()
-    if not 1 <= int(k) <= limit:
-        raise ValueError(f"threads must be between 1 and {limit}; got {k}")
-    _threads = int(k)
-
-
-def _workers() -> ThreadPoolExecutor:
-    """The pool of the ranges after the first (made once per process)."""
-    global _pool, _pool_pid
-    if _pool is None or _pool_pid != os.getpid():
-        _pool = ThreadPoolExecutor(
-            max_workers=max(1, default_threads() - 1), thread_name_prefix="lpbounds-sweep"
-        )
-        _pool_pid = os.getpid()
-    return _pool
-
-
-def _run(func: Callable[..., Any], args: tuple[Any, ...], bounds: np.ndarray) -> list[Any]:
-    """``func(*args, start, end)`` for each consecutive pair of ``bounds``; results in order.
-
-    The first range runs here, the others on the pool; all are waited for before this
-    returns or raises (a Ctrl-C while they run leaves no thread writing into the arrays).
-    """
-    edges = [int(b) for b in bounds]
-    if len(edges) <= 2:
-        return [func(*args, edges[0], edges[-1])]
-    pool = _workers()
-    futures: list[Future[Any]] = [
-        pool.submit(func, *args, a, b) for a, b in itertools.pairwise(edges[1:])
-    ]
-    try:
-        first = func(*args, edges[0], edges[1])
-    finally:
-        _wait(futures)
-    return [first, *(f.result() for f in futures)]
-
-
-def _split(n: int, indptr: np.ndarray | None = None) -> np.ndarray:
-    """Range bounds over ``n`` owners, one range per thread: equal numbers of rows
-    (``indptr``) or of owners."""
-    k = min(get_threads(), max(1, n))
-    share = np.arange(k + 1, dtype=np.int64)
-    if indptr is None:
-        return share * n // k
-    # integer targets: a float array would make searchsorted convert all of indptr; the
-    # targets below indptr[-1] give owners in [0, n], in order
-    cuts = np.searchsorted(indptr, share * int(indptr[-1]) // k)
-    cuts[0], cuts[-1] = 0, n
-    return cuts
 
 
 def _i8(a: Any) -> np.ndarray:
@@ -152,7 +73,8 @@ def bellman_max_stats(
     returns the min and max of ``out - v`` (one range of owners per thread)."""
     indptr = _i8(indptr)
     args = (indptr, _f8(reward), targets, probs, float(discount), _f8(v), out, arg)
-    return _extremes(_run(_c.bellman_max_stats, args, _split(indptr.shape[0] - 1, indptr)))
+    bounds = split_ranges(indptr.shape[0] - 1, indptr)
+    return _extremes(run_ranges(_c.bellman_max_stats, args, bounds))
 
 
 def policy_sweep_stats(
@@ -165,7 +87,7 @@ def policy_sweep_stats(
     rows = None if rows is None else _i8(rows)
     n = out.shape[0] if rows is None else rows.shape[0]
     args = (rows, _f8(reward), targets, probs, float(discount), _f8(v), out)
-    return _extremes(_run(_c.policy_sweep_stats, args, _split(n)))
+    return _extremes(run_ranges(_c.policy_sweep_stats, args, split_ranges(n)))
 
 
 def gather_rows(
@@ -176,7 +98,7 @@ def gather_rows(
     ``copy_probs``; a shared distribution is not copied)."""
     sel = _i8(sel)
     args = (sel, _f8(reward), targets, probs, out_reward, out_targets, out_probs, bool(copy_probs))
-    _run(_c.gather_rows, args, _split(sel.shape[0]))
+    run_ranges(_c.gather_rows, args, split_ranges(sel.shape[0]))
 
 
 def check_successors(succ: np.ndarray, allow: np.ndarray, n: int) -> tuple[int, int, int]:
@@ -184,6 +106,6 @@ def check_successors(succ: np.ndarray, allow: np.ndarray, n: int) -> tuple[int, 
     elsewhere), for :class:`lpbounds.model.mdp.FiniteMDP`; one pass, no temporaries (but a
     C-contiguous copy of a strided ``succ``)."""
     succ, allow = np.ascontiguousarray(succ), np.ascontiguousarray(allow, dtype=np.bool_)
-    parts = _run(_c.check_successors, (succ, allow, int(n)), _split(succ.shape[0]))
+    parts = run_ranges(_c.check_successors, (succ, allow, int(n)), split_ranges(succ.shape[0]))
     firsts = [p[1] for p in parts if p[1] >= 0]
     return sum(p[0] for p in parts), (firsts[0] if firsts else -1), sum(p[2] for p in parts)
