@@ -16,6 +16,16 @@
  * int32 / int64, C-contiguous, except probs, which may be any strided 2-D float64 view
  * (a broadcast row, stride 0, when all rows share one distribution: then the L
  * probabilities are read once and the row loop is unrolled for L <= 8).
+ *
+ * Every index is checked before it is used, so that no input reaches memory outside its
+ * array (the module is importable; the public constructors validate first, but a direct
+ * call must not crash the interpreter): indptr within [0, R] and not decreasing, a target
+ * within [0, len(v)), an entry of rows / sel within [0, R). The owners are swept in blocks
+ * of BLOCK: a block's indptr and targets are checked (a branch-free scan), then it is
+ * swept while they are in cache. The arithmetic, and so every number, is unchanged. A bad
+ * index stops the sweep and raises IndexError (targets, rows, sel) or ValueError
+ * (indptr); the output arrays may then be partly written. The checks' cost beside the
+ * sweeps is measured in lpbounds._kernels.native's docstring.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -90,13 +100,21 @@ typedef struct {
     const double *reward;
     const char *targets; /* int32 or int64, rows of L */
     const char *probs;   /* rows of L at strides ps0, ps1 */
-    Py_ssize_t ps0, ps1, L;
+    Py_ssize_t ps0, ps1, L, R;
     double lam;
     const double *v;
+    Py_ssize_t nv; /* entries of v: every target must be below */
 } Rows;
 
+/* The first bad index a sweep met (what: 0 none, 't' a target, 'p' an entry of indptr). */
+typedef struct {
+    int what;
+    Py_ssize_t i, l;
+    long long value;
+} Bad;
+
 /* q = q_r; TT the target type, LL the outcome count (a constant or rw->L), P(l) the l-th
- * probability of row r */
+ * probability of row r (its targets checked before: check_targets, CHECK_ROWS) */
 #define Q_ROW(TT, LL, P, q)                                                               \
     do {                                                                                  \
         const TT *t_ = (const TT *)rw->targets + (size_t)r * (LL);                       \
@@ -147,7 +165,7 @@ typedef struct {
 
 /* one loop body per (target type, shared probabilities unrolled for L <= 8, general) */
 #define DISPATCH(LOOP, TT)                                                                \
-    if (rw->ps0 == 0 && rw->L >= 1 && rw->L <= 8) {                                                     \
+    if (rw->ps0 == 0 && rw->L >= 1 && rw->L <= 8 && rw->R > 0) {                          \
         double p_[8];                                                                     \
         for (Py_ssize_t l = 0; l < rw->L; l++)                                            \
             p_[l] = *(const double *)(rw->probs + l * rw->ps1);                           \
@@ -165,9 +183,50 @@ typedef struct {
         LOOP(TT, rw->L, P_ROW)                                                            \
     }
 
-static void max_range(const Rows *rw, int t64, const int64_t *indptr, double *out,
+/* The first target of rows [r0, r1) outside [0, nv) into *bad; 1 if there is one. A scan
+ * with no branch first (an OR of "outside" over the targets read as unsigned, so that a
+ * negative one is outside too: compilers vectorise it), the search only when it finds one. */
+static int check_targets(const Rows *rw, int t64, int64_t r0, int64_t r1, Bad *bad) {
+    size_t a = (size_t)r0 * rw->L, b = (size_t)r1 * rw->L, nv = (size_t)rw->nv;
+    int out = 0;
+    if (t64) {
+        const uint64_t *t = (const uint64_t *)rw->targets, hi = (uint64_t)nv;
+        uint64_t any = 0;
+        for (size_t j = a; j < b; j++)
+            any |= t[j] >= hi;
+        out = any != 0;
+    } else {
+        /* as unsigned 32-bit: a negative target is above every count of entries */
+        const uint32_t *t = (const uint32_t *)rw->targets;
+        const uint32_t hi = nv > 0x7fffffffu ? 0x80000000u : (uint32_t)nv;
+        uint32_t any = 0;
+        for (size_t j = a; j < b; j++)
+            any |= t[j] >= hi;
+        out = any != 0;
+    }
+    if (!out)
+        return 0;
+    for (size_t j = a; j < b; j++) {
+        long long k = t64 ? ((const int64_t *)rw->targets)[j] : ((const int32_t *)rw->targets)[j];
+        if (k < 0 || (size_t)k >= nv) {
+            bad->what = 't';
+            bad->i = (Py_ssize_t)(j / (size_t)rw->L);
+            bad->l = (Py_ssize_t)(j % (size_t)rw->L);
+            bad->value = k;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Owners per block: a block's indptr and targets are checked, then the block is swept
+ * while those targets are still in cache (a separate pass over all of them first would
+ * read them from memory twice). */
+#define BLOCK 256
+
+static void max_block(const Rows *rw, int t64, const int64_t *indptr, double *out,
                       int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
-    double lc = INFINITY, hc = -INFINITY;
+    double lc = *lo, hc = *hi;
     if (t64) {
         DISPATCH(MAX_LOOP, int64_t)
     } else {
@@ -177,9 +236,9 @@ static void max_range(const Rows *rw, int t64, const int64_t *indptr, double *ou
     *hi = hc;
 }
 
-static void policy_range(const Rows *rw, int t64, const int64_t *rows, double *out,
+static void policy_block(const Rows *rw, int t64, const int64_t *rows, double *out,
                          Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
-    double lc = INFINITY, hc = -INFINITY;
+    double lc = *lo, hc = *hi;
     if (t64) {
         DISPATCH(POLICY_LOOP, int64_t)
     } else {
@@ -187,6 +246,89 @@ static void policy_range(const Rows *rw, int t64, const int64_t *rows, double *o
     }
     *lo = lc;
     *hi = hc;
+}
+
+/* owners [start, end), block by block: indptr within [0, R] and not decreasing, the
+ * targets of the block's rows within [0, nv), then the sweep of the block */
+static void max_range(const Rows *rw, int t64, const int64_t *indptr, double *out,
+                      int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi,
+                      Bad *bad) {
+    double lc = INFINITY, hc = -INFINITY;
+    for (Py_ssize_t b0 = start; b0 < end; b0 += BLOCK) {
+        Py_ssize_t b1 = end - b0 > BLOCK ? b0 + BLOCK : end;
+        for (Py_ssize_t i = b0; i <= b1; i++)
+            if (indptr[i] < (i > start ? indptr[i - 1] : 0) || indptr[i] > rw->R) {
+                bad->what = 'p';
+                bad->i = i;
+                bad->value = (long long)indptr[i];
+                goto stop;
+            }
+        if (check_targets(rw, t64, indptr[b0], indptr[b1], bad))
+            goto stop;
+        max_block(rw, t64, indptr, out, arg, b0, b1, &lc, &hc);
+    }
+stop:
+    *lo = lc;
+    *hi = hc;
+}
+
+/* the targets of rows[b0:b1] (each within [0, R), checked by the caller) below nv, as
+ * unsigned TT (a negative target is then above every count of entries), TMAX the largest
+ * count that TT's non-negative targets can reach; any outside: located, goto stop */
+#define CHECK_ROWS(TT, TMAX)                                                              \
+    {                                                                                     \
+        const TT *t_ = (const TT *)rw->targets;                                           \
+        const TT hi_ = (size_t)rw->nv > (size_t)(TMAX) ? (TT)(TMAX) + 1 : (TT)rw->nv;     \
+        TT any_ = 0;                                                                      \
+        for (Py_ssize_t i = b0; i < b1; i++) {                                            \
+            const TT *row_ = t_ + (size_t)rows[i] * rw->L;                                \
+            for (Py_ssize_t l = 0; l < rw->L; l++)                                        \
+                any_ |= row_[l] >= hi_;                                                   \
+        }                                                                                 \
+        if (any_)                                                                         \
+            for (Py_ssize_t i = b0; i < b1; i++)                                          \
+                if (check_targets(rw, t64, rows[i], rows[i] + 1, bad))                    \
+                    goto stop;                                                            \
+    }
+
+/* owners [start, end), block by block: the targets of the block's rows (rows checked by
+ * the caller), then the sweep of the block */
+static void policy_range(const Rows *rw, int t64, const int64_t *rows, double *out,
+                         Py_ssize_t start, Py_ssize_t end, double *lo, double *hi, Bad *bad) {
+    double lc = INFINITY, hc = -INFINITY;
+    for (Py_ssize_t b0 = start; b0 < end; b0 += BLOCK) {
+        Py_ssize_t b1 = end - b0 > BLOCK ? b0 + BLOCK : end;
+        if (rows == NULL) {
+            if (check_targets(rw, t64, b0, b1, bad))
+                goto stop;
+        } else if (t64) {
+            CHECK_ROWS(uint64_t, UINT64_MAX)
+        } else {
+            CHECK_ROWS(uint32_t, 0x7fffffffu)
+        }
+        policy_block(rw, t64, rows, out, b0, b1, &lc, &hc);
+    }
+stop:
+    *lo = lc;
+    *hi = hc;
+}
+
+/* Set the exception of the first bad index a sweep met: -1, or 0 when there is none. */
+static int raise_bad(const Bad *bad, const Rows *rw) {
+    if (bad->what == 't') {
+        PyErr_Format(PyExc_IndexError,
+                     "targets[%zd, %zd] = %lld is not an entry of v (0..%zd)", bad->i, bad->l,
+                     bad->value, rw->nv - 1);
+        return -1;
+    }
+    if (bad->what == 'p') {
+        PyErr_Format(PyExc_ValueError,
+                     "indptr[%zd] = %lld: the rows of an owner must lie within 0..%zd, "
+                     "indptr not decreasing",
+                     bad->i, bad->value, rw->R);
+        return -1;
+    }
+    return 0;
 }
 
 /* [start, end) within [0, n] */
@@ -216,6 +358,7 @@ static int get_rows(PyObject *reward, PyObject *targets, PyObject *probs, double
     rw->ps0 = b[2].b.strides[0];
     rw->ps1 = b[2].b.strides[1];
     rw->L = b[1].b.shape[1];
+    rw->R = R;
     rw->lam = lam;
     *t64 = b[1].b.itemsize == 8;
     return 0;
@@ -225,7 +368,9 @@ PyDoc_STRVAR(bellman_max_stats_doc,
              "bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg, start, end)"
              " -> (lo, hi)\n\nFor owners start <= i < end: out[i] = max of q_r over rows "
              "indptr[i]:indptr[i+1], arg[i] the first maximising row (-1 if none); returns the "
-             "min and max of out[i] - v[i] over the range. Releases the GIL.");
+             "min and max of out[i] - v[i] over the range. Raises IndexError for a target that is "
+             "not an entry of v, ValueError for an indptr outside 0..R or decreasing. Releases "
+             "the GIL.");
 
 static PyObject *bellman_max_stats(PyObject *self, PyObject *args) {
     PyObject *o_ip, *o_rew, *o_t, *o_p, *o_v, *o_out, *o_arg;
@@ -251,10 +396,14 @@ static PyObject *bellman_max_stats(PyObject *self, PyObject *args) {
     if (check_range(start, end, n))
         goto done;
     rw.v = b[4].b.buf;
+    rw.nv = b[4].b.shape[0];
     double lo, hi;
+    Bad bad = {0, 0, 0, 0};
     Py_BEGIN_ALLOW_THREADS
-    max_range(&rw, t64, b[3].b.buf, b[5].b.buf, b[6].b.buf, start, end, &lo, &hi);
+    max_range(&rw, t64, b[3].b.buf, b[5].b.buf, b[6].b.buf, start, end, &lo, &hi, &bad);
     Py_END_ALLOW_THREADS
+    if (raise_bad(&bad, &rw))
+        goto done;
     res = Py_BuildValue("dd", lo, hi);
 done:
     release(b, 7);
@@ -265,7 +414,8 @@ PyDoc_STRVAR(policy_sweep_stats_doc,
              "policy_sweep_stats(rows, reward, targets, probs, discount, v, out, start, end)"
              " -> (lo, hi)\n\nFor start <= i < end: out[i] = q_{rows[i]} (rows None: q_i, the "
              "rows packed one per owner); returns the min and max of out[i] - v[i] over the "
-             "range. Raises IndexError for a row outside the rows. Releases the GIL.");
+             "range. Raises IndexError for a row outside the rows or a target that is not an entry "
+             "of v. Releases the GIL.");
 
 static PyObject *policy_sweep_stats(PyObject *self, PyObject *args) {
     PyObject *o_rows, *o_rew, *o_t, *o_p, *o_v, *o_out;
@@ -300,10 +450,14 @@ static PyObject *policy_sweep_stats(PyObject *self, PyObject *args) {
                 goto done;
             }
     rw.v = b[4].b.buf;
+    rw.nv = b[4].b.shape[0];
     double lo, hi;
+    Bad bad = {0, 0, 0, 0};
     Py_BEGIN_ALLOW_THREADS
-    policy_range(&rw, t64, rows, b[5].b.buf, start, end, &lo, &hi);
+    policy_range(&rw, t64, rows, b[5].b.buf, start, end, &lo, &hi, &bad);
     Py_END_ALLOW_THREADS
+    if (raise_bad(&bad, &rw))
+        goto done;
     res = Py_BuildValue("dd", lo, hi);
 done:
     release(b, 6);
