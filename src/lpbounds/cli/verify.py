@@ -356,13 +356,17 @@ def _print_campaign(result: Any) -> None:
     )
     lacking = sum(result.missing.values())
     due = "none missing" if not lacking else f"{lacking:,} of {result.due:,} due missing"
+    sizes = (
+        f"{_count(params['n'], 'instance')} x {_count(len(params['claims']), 'claim')} x "
+        f"{_count(len(params['solvers']), 'solver')}"
+    )
     console.print(
-        f"lpbounds verify: {params['n']:,} instances x {len(params['claims'])} claims x "
-        f"{len(params['solvers'])} solvers: {len(result.frame):,} records on disk, {due}: "
+        f"lpbounds verify: {sizes}: {len(result.frame):,} records on disk, {due}: "
         f"{counts['holds']:,} hold, {counts['inconclusive']:,} inconclusive, "
         f"{counts['violated']:,} violated, {counts['error']:,} errors in "
         f"{result.seconds:.1f} s{resumed}",
         highlight=False,
+        soft_wrap=True,
     )
     print_table(_summary_table(result.records()))
     if result.counterexamples:
@@ -378,6 +382,10 @@ def _print_campaign(result: Any) -> None:
             highlight=False,
             soft_wrap=True,
         )
+
+
+def _count(k: int, word: str) -> str:
+    return f"{k:,} {word}{'s' if k != 1 else ''}"
 
 
 def _say_errors(count: int) -> None:
