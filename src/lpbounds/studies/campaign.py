@@ -34,25 +34,45 @@ Instances
 Batches, disk and resuming
     The instances run in batches of ``batch_size`` consecutive indices, serially, on one of
     Dask's local schedulers or on a Dask cluster (``scheduler``: the helper
-    :func:`lpbounds.studies.compare.dask_map` that ``compare`` uses). With ``out``, each
-    finished batch is written at once (``batches/batch-NNNNNN.csv`` or ``.parquet``,
-    atomically), so an interrupted campaign keeps what it finished; running it again with
-    the same arguments into the same folder skips the batches on disk and ends with the
-    same records as an uninterrupted run. At the end ``out`` holds ``records.csv`` (and
-    ``records.parquet``), ``summary.csv`` (per claim and solver,
-    :func:`~lpbounds.studies.verify.summarize`), ``counterexamples/`` (shrunk instances as
-    model files, ``counterexamples.csv``), ``campaign.json`` (the arguments) and
-    ``metadata.json`` (versions, machine, command line, as ``compare`` writes them).
+    :func:`lpbounds.studies.compare.dask_map` that ``compare`` uses; checked, and an address
+    connected to, before anything is written). With ``out``, each finished batch is written
+    at once (``batches/batch-NNNNNN.csv`` or ``.parquet``, atomically), then its entry in
+    ``manifest.json`` (atomically: file name, number of records, instance range, SHA-256,
+    lpbounds version and the fingerprints of its claims), so an interrupted campaign keeps
+    what it finished. ``campaign.json`` records the arguments, the lpbounds version and
+    every claim's fingerprint (:func:`~lpbounds.studies.claims.claim_fingerprint`).
+
+    Running it again with the same arguments into the same folder resumes it, and every
+    batch on disk is checked against the manifest first (its entry, the hash, the
+    instances, that it parses, the count, a record for each (instance, claim, solver)
+    due): one that fails is named in a note, moved into ``rejected/`` (never
+    deleted) and recomputed, so the campaign ends with the same records as an
+    uninterrupted run. A folder whose ``campaign.json`` or manifest cannot be read, written
+    before the manifest existed, holding other arguments, or whose claims (a conjecture's
+    source, the lpbounds version) changed since is refused with nothing changed; with
+    ``rerun_changed`` the changed claims' records are recomputed instead. At the end the
+    records on disk, read back and checked, are counted against those due
+    (:meth:`Batch.due`): batches that lack some are named in ``CampaignResult.missing`` and
+    fail the campaign. ``out`` then holds ``records.csv`` (and ``records.parquet``),
+    ``summary.csv`` (per claim and solver, :func:`~lpbounds.studies.verify.summarize`),
+    ``counterexamples/`` (shrunk instances as model files, ``counterexamples.csv``),
+    ``campaign.json``, ``manifest.json`` and ``metadata.json`` (versions, machine, command
+    line, as ``compare`` writes them; the records due and missing; the run's notes).
 
 Shrinking
     Every *violated* record (with ``shrink_inconclusive``, every *inconclusive* one too) is
     shrunk (:func:`lpbounds.studies.shrink.shrink`) while the verdict of that claim and
     solver stays the same, and the smallest instance found is written as a model file that
-    ``lpbounds solve`` and ``lpbounds verify`` read.
+    ``lpbounds solve`` and ``lpbounds verify`` read. The start is re-tested first (nothing is
+    written when it does not show the verdict), and each file is loaded back and the claim
+    run on it again before it is reported (also a file from an earlier run).
 
 Record columns: :data:`CAMPAIGN_COLUMNS` (:data:`~lpbounds.studies.verify.RECORD_COLUMNS`,
 ``error``, then the instance's :data:`INSTANCE_COLUMNS`); :data:`TIMING_COLUMNS` are the
-only ones that differ between two runs of one campaign.
+only ones that differ between two runs of one campaign. ``verdict`` is one of
+:data:`~lpbounds.studies.verify.OUTCOMES`: an *error* record (a predicate that raised,
+exited or returned no verdict; an instance that could not be built or checked) says why in
+``error``.
 """
 
 from __future__ import annotations
@@ -110,10 +130,14 @@ if TYPE_CHECKING:  # annotations only
 
 __all__ = [
     "CAMPAIGN_COLUMNS",
+    "CAMPAIGN_FILE",
     "FAMILIES",
     "FAMILY_WEIGHTS",
+    "FOLDER_VERSION",
     "INSTANCE_COLUMNS",
+    "MANIFEST_FILE",
     "PARTITION_KINDS",
+    "REJECTED_DIR",
     "TIMING_COLUMNS",
     "Batch",
     "CampaignInstance",
