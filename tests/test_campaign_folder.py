@@ -413,6 +413,40 @@ def test_an_edited_conjecture_is_refused_then_rerun_with_rerun_changed(
     assert main([*args, "-q"]) == code
 
 
+def test_rerun_changed_recomputes_only_the_changed_claims(tmp_path):
+    """Two conjectures in two files, one file edited: with rerun_changed, only that
+    claim's records are recomputed in every batch (merged with the other's, in the order
+    of a fresh run), and the records equal those of a fresh campaign."""
+    a, b = tmp_path / "a.py", tmp_path / "b.py"
+    a.write_text(CLAIMS)
+    b.write_text(CLAIMS)
+    kw = {"families": ["garnet", "masked-garnet"], "solvers": [], "batch_size": 2}
+    kw["shrink"] = False
+
+    def claims():
+        return [cl.load_claim(f"{a}:TRUE"), cl.load_claim(f"{b}:FALSE")]
+
+    out = tmp_path / "c"
+    first = cp.run_campaign(6, 1, out=out, claims=claims(), **kw)
+    a.write_text(CLAIMS.replace(
+        "return trial.at_least(trial.rlp_bound(), trial.vstar())",
+        "return trial.at_least(trial.vstar(), trial.rlp_bound())",
+    ))  # fmt: skip
+    with pytest.raises(ValidationError, match=r"the claim 'RLP bound >= V\*' changed"):
+        cp.run_campaign(6, 1, out=out, claims=claims(), **kw)
+    notes: list[str] = []
+    again = cp.run_campaign(6, 1, out=out, claims=claims(), rerun_changed=True,
+                            notify=notes.append, **kw)  # fmt: skip
+    assert len(notes) == 1 and notes[0].startswith("'RLP bound >= V*' changed (SHA-256 of")
+    fresh = cp.run_campaign(6, 1, out=tmp_path / "fresh", claims=claims(), **kw)
+    _same(fresh.frame, again.frame)
+    _same(cp.read_records(tmp_path / "fresh"), cp.read_records(out))
+    other = again.frame["check"] == "RLP bound = V*"
+    _same(first.frame[other].reset_index(drop=True), again.frame[other].reset_index(drop=True))
+    assert not first.frame[~other]["verdict"].equals(again.frame[~other]["verdict"])
+    assert again.batches_run == 3  # each batch redone (for one claim), none kept whole
+
+
 def test_a_changed_lpbounds_version_is_refused(whole, claims_file, capsys):
     meta = json.loads((whole / cp.CAMPAIGN_FILE).read_text())
     meta["lpbounds"] = "0.0.1"
