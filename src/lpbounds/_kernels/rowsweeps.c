@@ -21,8 +21,9 @@
  * array (the module is importable; the public constructors validate first, but a direct
  * call must not crash the interpreter): indptr within [0, R] and not decreasing, a target
  * within [0, len(v)), an entry of rows / sel within [0, R). The owners are swept in blocks
- * of BLOCK: a block's indptr and targets are checked (a branch-free scan), then it is
- * swept while they are in cache. The arithmetic, and so every number, is unchanged. A bad
+ * of BLOCK; a target is checked as it is read (Q_CHECKED), except in the improvement sweep
+ * with a shared distribution, which checks its block's targets first (check_targets) and
+ * then sweeps it from cache. The arithmetic, and so every number, is unchanged. A bad
  * index stops the sweep and raises IndexError (targets, rows, sel) or ValueError
  * (indptr); the output arrays may then be partly written. The checks' cost beside the
  * sweeps is measured in lpbounds._kernels.native's docstring.
@@ -114,7 +115,12 @@ typedef struct {
 } Bad;
 
 /* q = q_r; TT the target type, LL the outcome count (a constant or rw->L), P(l) the l-th
- * probability of row r (its targets checked before: check_targets, CHECK_ROWS) */
+ * probability of row r. Q_ROW reads targets checked before (check_targets); Q_CHECKED
+ * checks each target as it reads it, leaving the block (goto stop) at one outside
+ * [0, nv_): a branch that is never taken on valid rows, and no load depends on it, so
+ * the arithmetic is that of Q_ROW. Which is cheaper depends on the loop (measured in
+ * lpbounds._kernels.native's docstring): the improvement sweep with a shared
+ * distribution is slowed by the branch, and checks its block first instead. */
 #define Q_ROW(TT, LL, P, q)                                                               \
     do {                                                                                  \
         const TT *t_ = (const TT *)rw->targets + (size_t)r * (LL);                       \
@@ -123,18 +129,30 @@ typedef struct {
             acc_ += P(l) * rw->v[t_[l]];                                                  \
         q = rw->reward[r] + rw->lam * acc_;                                               \
     } while (0)
+#define Q_CHECKED(TT, LL, P, q)                                                           \
+    do {                                                                                  \
+        const TT *t_ = (const TT *)rw->targets + (size_t)r * (LL);                       \
+        double acc_ = 0.0;                                                                \
+        for (Py_ssize_t l = 0; l < (LL); l++) {                                           \
+            const size_t k_ = (size_t)(Py_ssize_t)t_[l];                                  \
+            if (k_ >= nv_)                                                                \
+                goto stop;                                                                \
+            acc_ += P(l) * rw->v[k_];                                                     \
+        }                                                                                 \
+        q = rw->reward[r] + rw->lam * acc_;                                               \
+    } while (0)
 #define P_ROW(l) (*(const double *)(rw->probs + r * rw->ps0 + (l) * rw->ps1))
 #define P_SHARED(l) (p_[l])
 
 /* owners [start, end): out[i] = max_r q_r, arg[i] = first maximising row; extremes of
  * out - v into *lo, *hi */
-#define MAX_LOOP(TT, LL, P)                                                               \
+#define MAX_LOOP(TT, LL, P, Q)                                                            \
     for (Py_ssize_t i = start; i < end; i++) {                                            \
         double best = -INFINITY;                                                          \
         int64_t best_r = -1;                                                              \
         for (int64_t r = indptr[i]; r < indptr[i + 1]; r++) {                             \
             double q;                                                                     \
-            Q_ROW(TT, LL, P, q);                                                          \
+            Q(TT, LL, P, q);                                                              \
             if (q > best) {                                                               \
                 best = q;                                                                 \
                 best_r = r;                                                               \
@@ -150,11 +168,11 @@ typedef struct {
     }
 
 /* owners [start, end): out[i] = q_{rows[i]} (rows NULL: row i) */
-#define POLICY_LOOP(TT, LL, P)                                                            \
+#define POLICY_LOOP(TT, LL, P, Q)                                                         \
     for (Py_ssize_t i = start; i < end; i++) {                                            \
         int64_t r = rows ? rows[i] : (int64_t)i;                                          \
         double q;                                                                         \
-        Q_ROW(TT, LL, P, q);                                                              \
+        Q(TT, LL, P, q);                                                                  \
         out[i] = q;                                                                       \
         double d = q - rw->v[i];                                                          \
         if (d < lc)                                                                       \
@@ -163,24 +181,28 @@ typedef struct {
             hc = d;                                                                       \
     }
 
-/* one loop body per (target type, shared probabilities unrolled for L <= 8, general) */
-#define DISPATCH(LOOP, TT)                                                                \
-    if (rw->ps0 == 0 && rw->L >= 1 && rw->L <= 8 && rw->R > 0) {                          \
+/* whether the rows share one distribution of 1..8 outcomes (the unrolled loops) */
+#define UNROLLED(rw) ((rw)->ps0 == 0 && (rw)->L >= 1 && (rw)->L <= 8 && (rw)->R > 0)
+
+/* one loop body per (target type, shared probabilities unrolled for L <= 8, general);
+ * QS, QR: the row macro of the unrolled and of the general loops */
+#define DISPATCH(LOOP, TT, QS, QR)                                                        \
+    if (UNROLLED(rw)) {                                                                   \
         double p_[8];                                                                     \
         for (Py_ssize_t l = 0; l < rw->L; l++)                                            \
             p_[l] = *(const double *)(rw->probs + l * rw->ps1);                           \
         switch (rw->L) {                                                                  \
-        case 1: LOOP(TT, 1, P_SHARED) break;                                              \
-        case 2: LOOP(TT, 2, P_SHARED) break;                                              \
-        case 3: LOOP(TT, 3, P_SHARED) break;                                              \
-        case 4: LOOP(TT, 4, P_SHARED) break;                                              \
-        case 5: LOOP(TT, 5, P_SHARED) break;                                              \
-        case 6: LOOP(TT, 6, P_SHARED) break;                                              \
-        case 7: LOOP(TT, 7, P_SHARED) break;                                              \
-        default: LOOP(TT, 8, P_SHARED) break;                                             \
+        case 1: LOOP(TT, 1, P_SHARED, QS) break;                                          \
+        case 2: LOOP(TT, 2, P_SHARED, QS) break;                                          \
+        case 3: LOOP(TT, 3, P_SHARED, QS) break;                                          \
+        case 4: LOOP(TT, 4, P_SHARED, QS) break;                                          \
+        case 5: LOOP(TT, 5, P_SHARED, QS) break;                                          \
+        case 6: LOOP(TT, 6, P_SHARED, QS) break;                                          \
+        case 7: LOOP(TT, 7, P_SHARED, QS) break;                                          \
+        default: LOOP(TT, 8, P_SHARED, QS) break;                                         \
         }                                                                                 \
     } else {                                                                              \
-        LOOP(TT, rw->L, P_ROW)                                                            \
+        LOOP(TT, rw->L, P_ROW, QR)                                                        \
     }
 
 /* The first target of rows [r0, r1) outside [0, nv) into *bad; 1 if there is one. A scan
@@ -219,37 +241,54 @@ static int check_targets(const Rows *rw, int t64, int64_t r0, int64_t r1, Bad *b
     return 0;
 }
 
-/* Owners per block: a block's indptr and targets are checked, then the block is swept
- * while those targets are still in cache (a separate pass over all of them first would
- * read them from memory twice). */
+/* Owners per block: a block is checked (its indptr; its targets, where the sweep does
+ * not check them as it goes), then swept while they are in cache. */
 #define BLOCK 256
 
-static void max_block(const Rows *rw, int t64, const int64_t *indptr, double *out,
-                      int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
+/* owners [start, end): 1 when a target outside [0, nv) stopped the sweep (the general
+ * loop's; the unrolled loop's targets were checked before) */
+static int max_block(const Rows *rw, int t64, const int64_t *indptr, double *out,
+                     int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
     double lc = *lo, hc = *hi;
+    const size_t nv_ = (size_t)rw->nv;
+    int hit = 0;
     if (t64) {
-        DISPATCH(MAX_LOOP, int64_t)
+        DISPATCH(MAX_LOOP, int64_t, Q_ROW, Q_CHECKED)
     } else {
-        DISPATCH(MAX_LOOP, int32_t)
+        DISPATCH(MAX_LOOP, int32_t, Q_ROW, Q_CHECKED)
     }
+    goto done;
+stop:
+    hit = 1;
+done:
     *lo = lc;
     *hi = hc;
+    return hit;
 }
 
-static void policy_block(const Rows *rw, int t64, const int64_t *rows, double *out,
-                         Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
+/* owners [start, end): 1 when a target outside [0, nv) stopped the sweep */
+static int policy_block(const Rows *rw, int t64, const int64_t *rows, double *out,
+                        Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
     double lc = *lo, hc = *hi;
+    const size_t nv_ = (size_t)rw->nv;
+    int hit = 0;
     if (t64) {
-        DISPATCH(POLICY_LOOP, int64_t)
+        DISPATCH(POLICY_LOOP, int64_t, Q_CHECKED, Q_CHECKED)
     } else {
-        DISPATCH(POLICY_LOOP, int32_t)
+        DISPATCH(POLICY_LOOP, int32_t, Q_CHECKED, Q_CHECKED)
     }
+    goto done;
+stop:
+    hit = 1;
+done:
     *lo = lc;
     *hi = hc;
+    return hit;
 }
 
 /* owners [start, end), block by block: indptr within [0, R] and not decreasing, the
- * targets of the block's rows within [0, nv), then the sweep of the block */
+ * targets of the block's rows within [0, nv) (before the sweep with a shared
+ * distribution, during it otherwise), the sweep of the block */
 static void max_range(const Rows *rw, int t64, const int64_t *indptr, double *out,
                       int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi,
                       Bad *bad) {
@@ -263,52 +302,32 @@ static void max_range(const Rows *rw, int t64, const int64_t *indptr, double *ou
                 bad->value = (long long)indptr[i];
                 goto stop;
             }
-        if (check_targets(rw, t64, indptr[b0], indptr[b1], bad))
+        if ((UNROLLED(rw) && check_targets(rw, t64, indptr[b0], indptr[b1], bad)) ||
+            (max_block(rw, t64, indptr, out, arg, b0, b1, &lc, &hc) &&
+             check_targets(rw, t64, indptr[b0], indptr[b1], bad)))
             goto stop;
-        max_block(rw, t64, indptr, out, arg, b0, b1, &lc, &hc);
     }
 stop:
     *lo = lc;
     *hi = hc;
 }
 
-/* the targets of rows[b0:b1] (each within [0, R), checked by the caller) below nv, as
- * unsigned TT (a negative target is then above every count of entries), TMAX the largest
- * count that TT's non-negative targets can reach; any outside: located, goto stop */
-#define CHECK_ROWS(TT, TMAX)                                                              \
-    {                                                                                     \
-        const TT *t_ = (const TT *)rw->targets;                                           \
-        const TT hi_ = (size_t)rw->nv > (size_t)(TMAX) ? (TT)(TMAX) + 1 : (TT)rw->nv;     \
-        TT any_ = 0;                                                                      \
-        for (Py_ssize_t i = b0; i < b1; i++) {                                            \
-            const TT *row_ = t_ + (size_t)rows[i] * rw->L;                                \
-            for (Py_ssize_t l = 0; l < rw->L; l++)                                        \
-                any_ |= row_[l] >= hi_;                                                   \
-        }                                                                                 \
-        if (any_)                                                                         \
-            for (Py_ssize_t i = b0; i < b1; i++)                                          \
-                if (check_targets(rw, t64, rows[i], rows[i] + 1, bad))                    \
-                    goto stop;                                                            \
-    }
-
-/* owners [start, end), block by block: the targets of the block's rows (rows checked by
- * the caller), then the sweep of the block */
+/* owners [start, end), block by block (rows checked by the caller; the targets during the
+ * sweep): a block stopped by a target is searched for it */
 static void policy_range(const Rows *rw, int t64, const int64_t *rows, double *out,
                          Py_ssize_t start, Py_ssize_t end, double *lo, double *hi, Bad *bad) {
     double lc = INFINITY, hc = -INFINITY;
     for (Py_ssize_t b0 = start; b0 < end; b0 += BLOCK) {
         Py_ssize_t b1 = end - b0 > BLOCK ? b0 + BLOCK : end;
-        if (rows == NULL) {
-            if (check_targets(rw, t64, b0, b1, bad))
-                goto stop;
-        } else if (t64) {
-            CHECK_ROWS(uint64_t, UINT64_MAX)
-        } else {
-            CHECK_ROWS(uint32_t, 0x7fffffffu)
+        if (policy_block(rw, t64, rows, out, b0, b1, &lc, &hc)) {
+            for (Py_ssize_t i = b0; i < b1; i++) {
+                int64_t r = rows ? rows[i] : (int64_t)i;
+                if (check_targets(rw, t64, r, r + 1, bad))
+                    break;
+            }
+            break;
         }
-        policy_block(rw, t64, rows, out, b0, b1, &lc, &hc);
     }
-stop:
     *lo = lc;
     *hi = hc;
 }
