@@ -37,8 +37,9 @@ the checks add 12 % to an improvement sweep and 8 % to a policy sweep with a sha
 distribution (7.96 against 7.07 ms, 3.89 against 3.64 ms), 10 % and 14 % with one
 distribution per row (12.56 against 11.43 ms, 6.69 against 5.85 ms); ``solve_exact`` of
 that garnet (MPI, two threads, 16 interleaved solves) 11 % and 14 % (0.189 against 0.172
-s, 0.416 against 0.380 s). Checking every block first instead cost 26-48 % of the shared
-sweeps; checking during every loop, 113 % of the shared improvement sweep.
+s, 0.416 against 0.380 s); repeated runs varied by about 5 points. Checking every block
+first instead cost 26-48 % of the shared sweeps; checking during every loop, 113 % of the
+shared improvement sweep.
 
 The thread count is :func:`get_threads` (numba's default rule: ``NUMBA_NUM_THREADS`` if
 set, else the CPUs this process may run on); :func:`lpbounds._kernels.dispatch.set_threads`
