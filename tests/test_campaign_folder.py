@@ -437,7 +437,13 @@ def test_rerun_changed_recomputes_only_the_changed_claims(tmp_path):
     notes: list[str] = []
     again = cp.run_campaign(6, 1, out=out, claims=claims(), rerun_changed=True,
                             notify=notes.append, **kw)  # fmt: skip
-    assert len(notes) == 1 and notes[0].startswith("'RLP bound >= V*' changed (SHA-256 of")
+    assert len(notes) == 2 and notes[0].startswith("'RLP bound >= V*' changed (SHA-256 of")
+    assert notes[1] == (
+        "3 batch files held records of changed claims: moved to rejected/, their records recomputed"
+    )
+    assert sorted(p.name for p in (out / "rejected").iterdir()) == [
+        f"batch-00000{k}.csv" for k in range(3)
+    ]  # the old predicate's records, kept
     fresh = cp.run_campaign(6, 1, out=tmp_path / "fresh", claims=claims(), **kw)
     _same(fresh.frame, again.frame)
     _same(cp.read_records(tmp_path / "fresh"), cp.read_records(out))

@@ -36,11 +36,12 @@ Batches, disk and resuming
     Dask's local schedulers or on a Dask cluster (``scheduler``: the helper
     :func:`lpbounds.studies.compare.dask_map` that ``compare`` uses; checked, and an address
     connected to, before anything is written). With ``out``, each finished batch is written
-    at once (``batches/batch-NNNNNN.csv`` or ``.parquet``, atomically), then its entry in
-    ``manifest.json`` (atomically: file name, number of records, instance range, SHA-256,
-    lpbounds version and the fingerprints of its claims), so an interrupted campaign keeps
-    what it finished. ``campaign.json`` records the arguments, the lpbounds version and
-    every claim's fingerprint (:func:`~lpbounds.studies.claims.claim_fingerprint`).
+    at once (``batches/batch-NNNNNN.csv`` or ``.parquet``, atomically) with its entry in
+    ``manifest.json`` (atomically, before the file is renamed into place: file name, number
+    of records, instance range, SHA-256, lpbounds version and the fingerprints of its
+    claims), so an interrupted campaign keeps what it finished. ``campaign.json`` records
+    the arguments, the lpbounds version and every claim's fingerprint
+    (:func:`~lpbounds.studies.claims.claim_fingerprint`).
 
     Running it again with the same arguments into the same folder resumes it, and every
     batch on disk is checked against the manifest first (its entry, the hash, the
@@ -50,7 +51,8 @@ Batches, disk and resuming
     uninterrupted run. A folder whose ``campaign.json`` or manifest cannot be read, written
     before the manifest existed, holding other arguments, or whose claims (a conjecture's
     source, the lpbounds version) changed since is refused with nothing changed; with
-    ``rerun_changed`` the changed claims' records are recomputed instead. At the end the
+    ``rerun_changed`` the changed claims' records are recomputed instead (the old files
+    moved into ``rejected/``). At the end the
     records on disk, read back and checked, are counted against those due
     (:meth:`Batch.due`): batches that lack some are named in ``CampaignResult.missing`` and
     fail the campaign. ``out`` then holds ``records.csv`` (and ``records.parquet``),
@@ -522,9 +524,13 @@ def _frame(records: Sequence[Record]) -> pd.DataFrame:
     return frame
 
 
-def _write_frame(frame: pd.DataFrame, path: Path) -> str:
+def _write_frame(
+    frame: pd.DataFrame, path: Path, before_rename: Callable[[str], None] | None = None
+) -> str:
     """Write a table atomically (CSV with ``nan`` for missing numbers, or Parquet); the
-    SHA-256 of the bytes written (hashed from the file before it is renamed into place)."""
+    SHA-256 of the bytes written, hashed from the temporary file, which is handed to
+    ``before_rename`` before that file is renamed into place (if it raises, ``path`` is
+    left as it was)."""
     digest: list[str] = []
 
     def write(tmp: Path) -> None:
@@ -536,6 +542,8 @@ def _write_frame(frame: pd.DataFrame, path: Path) -> str:
         else:
             frame.to_parquet(tmp, index=False)
         digest.append(file_sha256(tmp))
+        if before_rename is not None:
+            before_rename(digest[0])
 
     write_atomic(path, write)
     return digest[0]
@@ -674,19 +682,32 @@ class _Folder:
         write_text_atomic(self.path / MANIFEST_FILE, json.dumps(data, indent=1) + "\n")
 
     def write(self, batch: Batch, frame: pd.DataFrame) -> None:
-        """The batch file, then its manifest entry (each atomically): a batch file without
-        an entry (the run killed between the two) is recomputed on resume."""
-        path = self.file(batch.stem)
-        digest = _write_frame(frame, path)
-        self.entries[batch.stem] = {
-            "file": path.name,
-            "records": len(frame),
-            "instances": batch.instances,
-            "sha256": digest,
-            "lpbounds": VERSION,
-            "claims": {c.name: self.fingerprints[c.name] for c in batch.claims},
-        }
-        self.save_manifest()
+        """The batch file with its manifest entry, each atomically: the entry is written
+        while the file is still a temporary one, then the file is renamed into place. So a
+        batch file on disk has its entry whenever the run stops (Ctrl-C, a kill); an entry
+        whose file is missing or differs (stopped in between) is recomputed on resume."""
+        path, stem = self.file(batch.stem), batch.stem
+        before = self.entries.get(stem)
+
+        def record(digest: str) -> None:
+            self.entries[stem] = {
+                "file": path.name,
+                "records": len(frame),
+                "instances": batch.instances,
+                "sha256": digest,
+                "lpbounds": VERSION,
+                "claims": {c.name: self.fingerprints[c.name] for c in batch.claims},
+            }
+            try:
+                self.save_manifest()
+            except BaseException:  # the file is not renamed: its entry is not kept either
+                if before is None:
+                    self.entries.pop(stem, None)
+                else:
+                    self.entries[stem] = before
+                raise
+
+        _write_frame(frame, path, record)
 
     def aside(self, path: Path) -> Path:
         """Move ``path`` into ``rejected/`` under a free name (never over another)."""
@@ -883,7 +904,7 @@ def _plan_work(folder: _Folder, batches: list[Batch], note: CampaignNote) -> lis
     where some of its claims changed since it was written, those are redone); one that
     fails is named, moved aside and recomputed; a file that is not a batch of this
     campaign is moved aside. One note per file moved or batch redone."""
-    work = []
+    work, replaced = [], 0
     planned = {folder.file(b.stem).name for b in batches}
     for path in sorted(folder.batches.iterdir()):
         if path.name not in planned:
@@ -922,10 +943,19 @@ def _plan_work(folder: _Folder, batches: list[Batch], note: CampaignNote) -> lis
             work.append(_Work(b))
         elif not changed:
             work.append(_Work(b, done=True, kept=frame))
-        elif b.number < 0 or changed >= {c.name for c in b.claims}:
-            work.append(_Work(b))  # every claim changed: computed again, replacing the file
-        else:
-            work.append(_Work(b, kept=frame, redo=changed))
+        else:  # the old records are kept aside; the batch is rewritten
+            folder.aside(path)
+            folder.entries.pop(b.stem)
+            replaced += 1
+            if b.number < 0 or changed >= {c.name for c in b.claims}:
+                work.append(_Work(b))  # every claim changed: computed again
+            else:
+                work.append(_Work(b, kept=frame, redo=changed))
+    if replaced:
+        note(
+            f"{replaced} batch file{'s' if replaced != 1 else ''} held records of changed "
+            f"claims: moved to {REJECTED_DIR}/, their records recomputed"
+        )
     stems = {b.stem for b in batches}
     for stem in [s for s in folder.entries if s not in stems]:
         del folder.entries[stem]
