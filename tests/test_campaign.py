@@ -167,7 +167,8 @@ def test_the_false_conjecture_is_shrunk_to_at_most_3_states(tmp_path):
 def test_a_true_conjecture_has_no_counterexample_in_200_instances():
     res = cp.run_campaign(200, 5, families=GARNETS, claims=[TRUE], solvers=[], batch_size=50)
     assert len(res.frame) == 200
-    assert res.verdicts() == {"holds": 200, "violated": 0, "inconclusive": 0}
+    assert res.verdicts() == {"holds": 200, "violated": 0, "inconclusive": 0, "error": 0}
+    assert res.due == 200 and res.missing == {}
     assert res.counterexamples == [] and res.exit_status(strict=True) == 0
 
 
@@ -202,11 +203,12 @@ def test_a_predicate_may_return_a_bool_a_verdict_or_raise():
     assert recs["yes"]["verdict"] == Verdict.HOLDS
     assert recs["no"]["verdict"] == Verdict.VIOLATED and recs["no"]["detail"] == "said no"
     assert recs["word"]["verdict"] == Verdict.INCONCLUSIVE
-    assert recs["boom"]["verdict"] == Verdict.INCONCLUSIVE
+    assert recs["boom"]["verdict"] == "error"  # a crash is an error record, not a verdict
     assert recs["boom"]["error"] == "RuntimeError: kaput"
     bad = cl.Conjecture("bad", lambda t: 3.5, uses_solver=False)
-    with pytest.raises(ValidationError, match=r"conjecture 'bad' returned 3\.5"):
-        cl.run_claims(inst, [bad], [])
+    (rec,) = cl.run_claims(inst, [bad], [])
+    assert rec["verdict"] == "error"
+    assert rec["error"].startswith("conjecture 'bad' returned 3.5, not a verdict")
     with pytest.raises(ValidationError, match="predicate must be callable"):
         cl.Conjecture("x", 3)  # type: ignore[arg-type]
 

@@ -255,7 +255,7 @@ CASES: dict[str, Case] = {
     ),
     "from-matrices-rows-0.5": (
         lambda: lb.FiniteMDP.from_matrices([np.eye(2) * 0.5], [0.0, 0.0], 0.9),
-        r"probabilities\[0, 0, :\] sum to 0\.5",
+        r"row 0 of P\[0\]: the probabilities sum to 0\.5",
     ),
     "from-matrices-R-complex": (
         lambda: lb.FiniteMDP.from_matrices([np.eye(2)], [0.0, 1j], 0.9),

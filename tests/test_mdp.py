@@ -165,7 +165,7 @@ def test_from_matrices_errors():
         lb.FiniteMDP.from_matrices(bad, np.zeros((4, 2)), 0.9)
     bad = [m.copy() for m in mats]
     bad[0][3, 0] += 0.2
-    with pytest.raises(ValidationError, match=r"probabilities\[3, 0, :\] sum to"):
+    with pytest.raises(ValidationError, match=r"row 3 of P\[0\]: the probabilities sum to 1\.2"):
         lb.FiniteMDP.from_matrices(bad, np.zeros((4, 2)), 0.9)
     with pytest.raises(ValidationError, match="R must have shape"):
         lb.FiniteMDP.from_matrices(mats, np.zeros((3, 2)), 0.9)

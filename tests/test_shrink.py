@@ -34,8 +34,9 @@ def test_a_size_predicate_is_shrunk_to_its_minimum():
         "blocks": 2,
     }
     assert np.all(out.mdp.rewards == 0.0) and out.mdp.discount == 0.0
-    assert out.evaluations == len(calls) and 0 < out.steps <= out.evaluations
-    assert keep(out.mdp, out.partition)
+    assert calls[0] == 20  # the start is tested first (not counted as a candidate)
+    assert out.evaluations == len(calls) - 1 and 0 < out.steps <= out.evaluations
+    assert out.shown and keep(out.mdp, out.partition)
 
 
 def test_the_result_always_passes_and_the_budget_is_kept():
@@ -63,6 +64,24 @@ def test_the_result_always_passes_and_the_budget_is_kept():
         assert out.mdp is mdp and out.partition is part
     none = sh.shrink(mdp, part, lambda m, p: False)
     assert none.steps == 0 and none.mdp is mdp
+
+
+def test_a_start_that_does_not_show_the_verdict_is_not_shrunk():
+    """The start is re-tested: a record may say "violated" where the instance shows
+    nothing (edited on disk, a solver that answers differently now); then no candidate is
+    tried and ``shown`` is False, so no counterexample is written from it."""
+    mdp = lb.garnet(6, 2, 2, 0.5, seed=1)
+    part = lb.random_partition(6, 2, seed=0)
+    calls = []
+
+    def keep(m, p):
+        calls.append(m.n_states)
+        return False
+
+    out = sh.shrink(mdp, part, keep)
+    assert calls == [6] and not out.shown
+    assert (out.evaluations, out.steps) == (0, 0) and out.mdp is mdp and out.partition is part
+    assert sh.shrink(mdp, part, lambda m, p: True).shown
 
 
 def test_shrinking_keeps_a_violated_claim_checked_independently():
@@ -93,7 +112,7 @@ def test_removed_states_become_self_loops():
 
     def keep(m, p):
         seen.append(np.asarray(m.successors).copy())
-        return False
+        return m is mdp  # only the start shows it: every candidate is tested, none kept
 
     sh.shrink(mdp, part, keep)
     two = [s for s in seen if s.shape[0] == 2]

@@ -305,3 +305,11 @@ PLOT_BOUND_RTOL: float = 1e-9
 #: the objective is ``c'x`` recomputed in floating point (a few ulps per term), while another
 #: cost changes it by a share of the value scale.
 PLOT_COST_MATCH_RTOL: float = 1e-9
+
+# ---------------------------------------------------------------------- Dask
+#: Seconds a campaign or a study waits for a Dask scheduler's address (``--scheduler
+#: tcp://host:port``) to answer before refusing it, before anything is written: a TCP
+#: connection on a local network opens in milliseconds and a scheduler answers a new
+#: client in well under a second, while an address with nothing behind it (a firewall
+#: dropping the packets) would otherwise hang for the system's TCP timeout (minutes).
+SCHEDULER_CONNECT_SECONDS: float = 10.0

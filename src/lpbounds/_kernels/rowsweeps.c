@@ -16,6 +16,17 @@
  * int32 / int64, C-contiguous, except probs, which may be any strided 2-D float64 view
  * (a broadcast row, stride 0, when all rows share one distribution: then the L
  * probabilities are read once and the row loop is unrolled for L <= 8).
+ *
+ * Every index is checked before it is used, so that no input reaches memory outside its
+ * array (the module is importable; the public constructors validate first, but a direct
+ * call must not crash the interpreter): indptr within [0, R] and not decreasing, a target
+ * within [0, len(v)), an entry of rows / sel within [0, R). The owners are swept in blocks
+ * of BLOCK; a target is checked as it is read (Q_CHECKED), except in the improvement sweep
+ * with a shared distribution, which checks its block's targets first (check_targets) and
+ * then sweeps it from cache. The arithmetic, and so every number, is unchanged. A bad
+ * index stops the sweep and raises IndexError (targets, rows, sel) or ValueError
+ * (indptr); the output arrays may then be partly written. The checks' cost beside the
+ * sweeps is measured in lpbounds._kernels.native's docstring.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -90,13 +101,26 @@ typedef struct {
     const double *reward;
     const char *targets; /* int32 or int64, rows of L */
     const char *probs;   /* rows of L at strides ps0, ps1 */
-    Py_ssize_t ps0, ps1, L;
+    Py_ssize_t ps0, ps1, L, R;
     double lam;
     const double *v;
+    Py_ssize_t nv; /* entries of v: every target must be below */
 } Rows;
 
+/* The first bad index a sweep met (what: 0 none, 't' a target, 'p' an entry of indptr). */
+typedef struct {
+    int what;
+    Py_ssize_t i, l;
+    long long value;
+} Bad;
+
 /* q = q_r; TT the target type, LL the outcome count (a constant or rw->L), P(l) the l-th
- * probability of row r */
+ * probability of row r. Q_ROW reads targets checked before (check_targets); Q_CHECKED
+ * checks each target as it reads it, leaving the block (goto stop) at one outside
+ * [0, nv_): a branch that is never taken on valid rows, and no load depends on it, so
+ * the arithmetic is that of Q_ROW. Which is cheaper depends on the loop (measured in
+ * lpbounds._kernels.native's docstring): the improvement sweep with a shared
+ * distribution is slowed by the branch, and checks its block first instead. */
 #define Q_ROW(TT, LL, P, q)                                                               \
     do {                                                                                  \
         const TT *t_ = (const TT *)rw->targets + (size_t)r * (LL);                       \
@@ -105,18 +129,30 @@ typedef struct {
             acc_ += P(l) * rw->v[t_[l]];                                                  \
         q = rw->reward[r] + rw->lam * acc_;                                               \
     } while (0)
+#define Q_CHECKED(TT, LL, P, q)                                                           \
+    do {                                                                                  \
+        const TT *t_ = (const TT *)rw->targets + (size_t)r * (LL);                       \
+        double acc_ = 0.0;                                                                \
+        for (Py_ssize_t l = 0; l < (LL); l++) {                                           \
+            const size_t k_ = (size_t)(Py_ssize_t)t_[l];                                  \
+            if (k_ >= nv_)                                                                \
+                goto stop;                                                                \
+            acc_ += P(l) * rw->v[k_];                                                     \
+        }                                                                                 \
+        q = rw->reward[r] + rw->lam * acc_;                                               \
+    } while (0)
 #define P_ROW(l) (*(const double *)(rw->probs + r * rw->ps0 + (l) * rw->ps1))
 #define P_SHARED(l) (p_[l])
 
 /* owners [start, end): out[i] = max_r q_r, arg[i] = first maximising row; extremes of
  * out - v into *lo, *hi */
-#define MAX_LOOP(TT, LL, P)                                                               \
+#define MAX_LOOP(TT, LL, P, Q)                                                            \
     for (Py_ssize_t i = start; i < end; i++) {                                            \
         double best = -INFINITY;                                                          \
         int64_t best_r = -1;                                                              \
         for (int64_t r = indptr[i]; r < indptr[i + 1]; r++) {                             \
             double q;                                                                     \
-            Q_ROW(TT, LL, P, q);                                                          \
+            Q(TT, LL, P, q);                                                              \
             if (q > best) {                                                               \
                 best = q;                                                                 \
                 best_r = r;                                                               \
@@ -132,11 +168,11 @@ typedef struct {
     }
 
 /* owners [start, end): out[i] = q_{rows[i]} (rows NULL: row i) */
-#define POLICY_LOOP(TT, LL, P)                                                            \
+#define POLICY_LOOP(TT, LL, P, Q)                                                         \
     for (Py_ssize_t i = start; i < end; i++) {                                            \
         int64_t r = rows ? rows[i] : (int64_t)i;                                          \
         double q;                                                                         \
-        Q_ROW(TT, LL, P, q);                                                              \
+        Q(TT, LL, P, q);                                                                  \
         out[i] = q;                                                                       \
         double d = q - rw->v[i];                                                          \
         if (d < lc)                                                                       \
@@ -145,48 +181,173 @@ typedef struct {
             hc = d;                                                                       \
     }
 
-/* one loop body per (target type, shared probabilities unrolled for L <= 8, general) */
-#define DISPATCH(LOOP, TT)                                                                \
-    if (rw->ps0 == 0 && rw->L >= 1 && rw->L <= 8) {                                                     \
+/* whether the rows share one distribution of 1..8 outcomes (the unrolled loops) */
+#define UNROLLED(rw) ((rw)->ps0 == 0 && (rw)->L >= 1 && (rw)->L <= 8 && (rw)->R > 0)
+
+/* one loop body per (target type, shared probabilities unrolled for L <= 8, general);
+ * QS, QR: the row macro of the unrolled and of the general loops */
+#define DISPATCH(LOOP, TT, QS, QR)                                                        \
+    if (UNROLLED(rw)) {                                                                   \
         double p_[8];                                                                     \
         for (Py_ssize_t l = 0; l < rw->L; l++)                                            \
             p_[l] = *(const double *)(rw->probs + l * rw->ps1);                           \
         switch (rw->L) {                                                                  \
-        case 1: LOOP(TT, 1, P_SHARED) break;                                              \
-        case 2: LOOP(TT, 2, P_SHARED) break;                                              \
-        case 3: LOOP(TT, 3, P_SHARED) break;                                              \
-        case 4: LOOP(TT, 4, P_SHARED) break;                                              \
-        case 5: LOOP(TT, 5, P_SHARED) break;                                              \
-        case 6: LOOP(TT, 6, P_SHARED) break;                                              \
-        case 7: LOOP(TT, 7, P_SHARED) break;                                              \
-        default: LOOP(TT, 8, P_SHARED) break;                                             \
+        case 1: LOOP(TT, 1, P_SHARED, QS) break;                                          \
+        case 2: LOOP(TT, 2, P_SHARED, QS) break;                                          \
+        case 3: LOOP(TT, 3, P_SHARED, QS) break;                                          \
+        case 4: LOOP(TT, 4, P_SHARED, QS) break;                                          \
+        case 5: LOOP(TT, 5, P_SHARED, QS) break;                                          \
+        case 6: LOOP(TT, 6, P_SHARED, QS) break;                                          \
+        case 7: LOOP(TT, 7, P_SHARED, QS) break;                                          \
+        default: LOOP(TT, 8, P_SHARED, QS) break;                                         \
         }                                                                                 \
     } else {                                                                              \
-        LOOP(TT, rw->L, P_ROW)                                                            \
+        LOOP(TT, rw->L, P_ROW, QR)                                                        \
     }
 
-static void max_range(const Rows *rw, int t64, const int64_t *indptr, double *out,
-                      int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
-    double lc = INFINITY, hc = -INFINITY;
+/* The first target of rows [r0, r1) outside [0, nv) into *bad; 1 if there is one. A scan
+ * with no branch first (an OR of "outside" over the targets read as unsigned, so that a
+ * negative one is outside too: compilers vectorise it), the search only when it finds one. */
+static int check_targets(const Rows *rw, int t64, int64_t r0, int64_t r1, Bad *bad) {
+    size_t a = (size_t)r0 * rw->L, b = (size_t)r1 * rw->L, nv = (size_t)rw->nv;
+    int out = 0;
     if (t64) {
-        DISPATCH(MAX_LOOP, int64_t)
+        const uint64_t *t = (const uint64_t *)rw->targets, hi = (uint64_t)nv;
+        uint64_t any = 0;
+        for (size_t j = a; j < b; j++)
+            any |= t[j] >= hi;
+        out = any != 0;
     } else {
-        DISPATCH(MAX_LOOP, int32_t)
+        /* as unsigned 32-bit: a negative target is above every count of entries */
+        const uint32_t *t = (const uint32_t *)rw->targets;
+        const uint32_t hi = nv > 0x7fffffffu ? 0x80000000u : (uint32_t)nv;
+        uint32_t any = 0;
+        for (size_t j = a; j < b; j++)
+            any |= t[j] >= hi;
+        out = any != 0;
+    }
+    if (!out)
+        return 0;
+    for (size_t j = a; j < b; j++) {
+        long long k = t64 ? ((const int64_t *)rw->targets)[j] : ((const int32_t *)rw->targets)[j];
+        if (k < 0 || (size_t)k >= nv) {
+            bad->what = 't';
+            bad->i = (Py_ssize_t)(j / (size_t)rw->L);
+            bad->l = (Py_ssize_t)(j % (size_t)rw->L);
+            bad->value = k;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Owners per block: a block is checked (its indptr; its targets, where the sweep does
+ * not check them as it goes), then swept while they are in cache. */
+#define BLOCK 256
+
+/* owners [start, end): 1 when a target outside [0, nv) stopped the sweep (the general
+ * loop's; the unrolled loop's targets were checked before) */
+static int max_block(const Rows *rw, int t64, const int64_t *indptr, double *out,
+                     int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
+    double lc = *lo, hc = *hi;
+    const size_t nv_ = (size_t)rw->nv;
+    int hit = 0;
+    if (t64) {
+        DISPATCH(MAX_LOOP, int64_t, Q_ROW, Q_CHECKED)
+    } else {
+        DISPATCH(MAX_LOOP, int32_t, Q_ROW, Q_CHECKED)
+    }
+    goto done;
+stop:
+    hit = 1;
+done:
+    *lo = lc;
+    *hi = hc;
+    return hit;
+}
+
+/* owners [start, end): 1 when a target outside [0, nv) stopped the sweep */
+static int policy_block(const Rows *rw, int t64, const int64_t *rows, double *out,
+                        Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
+    double lc = *lo, hc = *hi;
+    const size_t nv_ = (size_t)rw->nv;
+    int hit = 0;
+    if (t64) {
+        DISPATCH(POLICY_LOOP, int64_t, Q_CHECKED, Q_CHECKED)
+    } else {
+        DISPATCH(POLICY_LOOP, int32_t, Q_CHECKED, Q_CHECKED)
+    }
+    goto done;
+stop:
+    hit = 1;
+done:
+    *lo = lc;
+    *hi = hc;
+    return hit;
+}
+
+/* owners [start, end), block by block: indptr within [0, R] and not decreasing, the
+ * targets of the block's rows within [0, nv) (before the sweep with a shared
+ * distribution, during it otherwise), the sweep of the block */
+static void max_range(const Rows *rw, int t64, const int64_t *indptr, double *out,
+                      int64_t *arg, Py_ssize_t start, Py_ssize_t end, double *lo, double *hi,
+                      Bad *bad) {
+    double lc = INFINITY, hc = -INFINITY;
+    for (Py_ssize_t b0 = start; b0 < end; b0 += BLOCK) {
+        Py_ssize_t b1 = end - b0 > BLOCK ? b0 + BLOCK : end;
+        for (Py_ssize_t i = b0; i <= b1; i++)
+            if (indptr[i] < (i > start ? indptr[i - 1] : 0) || indptr[i] > rw->R) {
+                bad->what = 'p';
+                bad->i = i;
+                bad->value = (long long)indptr[i];
+                goto stop;
+            }
+        if ((UNROLLED(rw) && check_targets(rw, t64, indptr[b0], indptr[b1], bad)) ||
+            (max_block(rw, t64, indptr, out, arg, b0, b1, &lc, &hc) &&
+             check_targets(rw, t64, indptr[b0], indptr[b1], bad)))
+            goto stop;
+    }
+stop:
+    *lo = lc;
+    *hi = hc;
+}
+
+/* owners [start, end), block by block (rows checked by the caller; the targets during the
+ * sweep): a block stopped by a target is searched for it */
+static void policy_range(const Rows *rw, int t64, const int64_t *rows, double *out,
+                         Py_ssize_t start, Py_ssize_t end, double *lo, double *hi, Bad *bad) {
+    double lc = INFINITY, hc = -INFINITY;
+    for (Py_ssize_t b0 = start; b0 < end; b0 += BLOCK) {
+        Py_ssize_t b1 = end - b0 > BLOCK ? b0 + BLOCK : end;
+        if (policy_block(rw, t64, rows, out, b0, b1, &lc, &hc)) {
+            for (Py_ssize_t i = b0; i < b1; i++) {
+                int64_t r = rows ? rows[i] : (int64_t)i;
+                if (check_targets(rw, t64, r, r + 1, bad))
+                    break;
+            }
+            break;
+        }
     }
     *lo = lc;
     *hi = hc;
 }
 
-static void policy_range(const Rows *rw, int t64, const int64_t *rows, double *out,
-                         Py_ssize_t start, Py_ssize_t end, double *lo, double *hi) {
-    double lc = INFINITY, hc = -INFINITY;
-    if (t64) {
-        DISPATCH(POLICY_LOOP, int64_t)
-    } else {
-        DISPATCH(POLICY_LOOP, int32_t)
+/* Set the exception of the first bad index a sweep met: -1, or 0 when there is none. */
+static int raise_bad(const Bad *bad, const Rows *rw) {
+    if (bad->what == 't') {
+        PyErr_Format(PyExc_IndexError,
+                     "targets[%zd, %zd] = %lld is not an entry of v (0..%zd)", bad->i, bad->l,
+                     bad->value, rw->nv - 1);
+        return -1;
     }
-    *lo = lc;
-    *hi = hc;
+    if (bad->what == 'p') {
+        PyErr_Format(PyExc_ValueError,
+                     "indptr[%zd] = %lld: the rows of an owner must lie within 0..%zd, "
+                     "indptr not decreasing",
+                     bad->i, bad->value, rw->R);
+        return -1;
+    }
+    return 0;
 }
 
 /* [start, end) within [0, n] */
@@ -216,6 +377,7 @@ static int get_rows(PyObject *reward, PyObject *targets, PyObject *probs, double
     rw->ps0 = b[2].b.strides[0];
     rw->ps1 = b[2].b.strides[1];
     rw->L = b[1].b.shape[1];
+    rw->R = R;
     rw->lam = lam;
     *t64 = b[1].b.itemsize == 8;
     return 0;
@@ -225,7 +387,9 @@ PyDoc_STRVAR(bellman_max_stats_doc,
              "bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg, start, end)"
              " -> (lo, hi)\n\nFor owners start <= i < end: out[i] = max of q_r over rows "
              "indptr[i]:indptr[i+1], arg[i] the first maximising row (-1 if none); returns the "
-             "min and max of out[i] - v[i] over the range. Releases the GIL.");
+             "min and max of out[i] - v[i] over the range. Raises IndexError for a target that is "
+             "not an entry of v, ValueError for an indptr outside 0..R or decreasing. Releases "
+             "the GIL.");
 
 static PyObject *bellman_max_stats(PyObject *self, PyObject *args) {
     PyObject *o_ip, *o_rew, *o_t, *o_p, *o_v, *o_out, *o_arg;
@@ -251,10 +415,14 @@ static PyObject *bellman_max_stats(PyObject *self, PyObject *args) {
     if (check_range(start, end, n))
         goto done;
     rw.v = b[4].b.buf;
+    rw.nv = b[4].b.shape[0];
     double lo, hi;
+    Bad bad = {0, 0, 0, 0};
     Py_BEGIN_ALLOW_THREADS
-    max_range(&rw, t64, b[3].b.buf, b[5].b.buf, b[6].b.buf, start, end, &lo, &hi);
+    max_range(&rw, t64, b[3].b.buf, b[5].b.buf, b[6].b.buf, start, end, &lo, &hi, &bad);
     Py_END_ALLOW_THREADS
+    if (raise_bad(&bad, &rw))
+        goto done;
     res = Py_BuildValue("dd", lo, hi);
 done:
     release(b, 7);
@@ -265,7 +433,8 @@ PyDoc_STRVAR(policy_sweep_stats_doc,
              "policy_sweep_stats(rows, reward, targets, probs, discount, v, out, start, end)"
              " -> (lo, hi)\n\nFor start <= i < end: out[i] = q_{rows[i]} (rows None: q_i, the "
              "rows packed one per owner); returns the min and max of out[i] - v[i] over the "
-             "range. Raises IndexError for a row outside the rows. Releases the GIL.");
+             "range. Raises IndexError for a row outside the rows or a target that is not an entry "
+             "of v. Releases the GIL.");
 
 static PyObject *policy_sweep_stats(PyObject *self, PyObject *args) {
     PyObject *o_rows, *o_rew, *o_t, *o_p, *o_v, *o_out;
@@ -300,10 +469,14 @@ static PyObject *policy_sweep_stats(PyObject *self, PyObject *args) {
                 goto done;
             }
     rw.v = b[4].b.buf;
+    rw.nv = b[4].b.shape[0];
     double lo, hi;
+    Bad bad = {0, 0, 0, 0};
     Py_BEGIN_ALLOW_THREADS
-    policy_range(&rw, t64, rows, b[5].b.buf, start, end, &lo, &hi);
+    policy_range(&rw, t64, rows, b[5].b.buf, start, end, &lo, &hi, &bad);
     Py_END_ALLOW_THREADS
+    if (raise_bad(&bad, &rw))
+        goto done;
     res = Py_BuildValue("dd", lo, hi);
 done:
     release(b, 6);

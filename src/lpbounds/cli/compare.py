@@ -261,13 +261,14 @@ def instance_list(given: list[str] | None) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..studies.compare import run_study, save_study
+    from ..studies.compare import check_scheduler, run_study, save_study
 
     if args.models and args.instances:
         raise ValidationError(
             "instances given twice: as MODEL arguments and with --instances; give one or the other"
         )
     instances = instance_list(args.instances or args.models) or None
+    scheduler = check_scheduler(args.scheduler)  # before --out is touched
     check_output_dir(args.out, "--out", replaceable=COMPARE_FILES)
     with progress() as prog:
         task = prog.add_task("comparing solvers", total=None, status="")
@@ -283,7 +284,7 @@ def run(args: argparse.Namespace) -> int:
             accuracy=args.accuracy,
             time_limit=args.time_limit,
             jobs=args.jobs,
-            scheduler=args.scheduler,
+            scheduler=scheduler,
             progress=cb,
         )
     if result.frame.empty:

@@ -154,6 +154,13 @@ def _add_campaign_arguments(p: argparse.ArgumentParser) -> None:
         metavar="S",
         help="time budget of each shrink in seconds (default 60)",
     )
+    g.add_argument(
+        "--rerun-changed",
+        action="store_true",
+        help="resume a campaign whose conjectures (their files) or lpbounds version changed "
+        "since its records were made, recomputing the records of what changed (without "
+        "it such a folder is refused, naming what changed)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -170,6 +177,7 @@ def run(args: argparse.Namespace) -> int:
             ("--families", args.families),
             ("--scheduler", args.scheduler),
             ("--shrink-inconclusive", args.shrink_inconclusive or None),
+            ("--rerun-changed", args.rerun_changed or None),
         )
         if value is not None
     ]
@@ -231,6 +239,7 @@ def _run_models(args: argparse.Namespace, solvers: list[str], claims: list | Non
         )
     if args.json:
         write_json(records, args.json)
+    _say_errors(sum(r["verdict"] == "error" for r in records))
     return exit_status(records, strict=args.strict)
 
 
@@ -239,6 +248,7 @@ def _run_campaign(args: argparse.Namespace, claims: list | None) -> int:
     from pathlib import Path
 
     from ..studies.campaign import run_campaign
+    from ..studies.compare import check_scheduler
 
     if args.model is not None:
         raise ValidationError(
@@ -248,6 +258,11 @@ def _run_campaign(args: argparse.Namespace, claims: list | None) -> int:
     if args.json:
         raise ValidationError("--json and --out: a campaign writes DIR/records.csv")
     out = Path(args.out)
+    scheduler = check_scheduler(args.scheduler)  # before DIR is touched
+
+    def note(line: str) -> None:  # a batch recomputed, a counterexample not reproduced
+        err_console.print(f"lpbounds verify: {line}", highlight=False, soft_wrap=True, markup=False)
+
     with progress() as prog:
         task = prog.add_task("campaign", total=None, status="")
 
@@ -271,10 +286,12 @@ def _run_campaign(args: argparse.Namespace, claims: list | None) -> int:
                 out=out,
                 fmt=args.format,
                 batch_size=args.batch_size,
-                scheduler=args.scheduler,
+                scheduler=scheduler,
                 shrink_inconclusive=args.shrink_inconclusive,
                 shrink_seconds=args.shrink_seconds,
                 progress=report,
+                notify=note,
+                rerun_changed=args.rerun_changed,
                 command_line=["lpbounds", *getattr(args, "argv", [])],
             )
         except KeyboardInterrupt:
@@ -330,25 +347,60 @@ def _print_counterexamples(result: Any) -> None:
 
 def _print_campaign(result: Any) -> None:
     counts = result.verdicts()
+    params = result.params
     resumed = (
         f" ({result.batches_resumed} of {result.batches_run + result.batches_resumed} batches "
         "from an earlier run)"
         if result.batches_resumed
         else ""
     )
+    lacking = sum(result.missing.values())
+    due = "none missing" if not lacking else f"{lacking:,} of {result.due:,} due missing"
+    sizes = (
+        f"{_count(params['n'], 'instance')} x {_count(len(params['claims']), 'claim')} x "
+        f"{_count(len(params['solvers']), 'solver')}"
+    )
     console.print(
-        f"lpbounds verify: {result.params['n']:,} instances, {len(result.frame):,} records: "
+        f"lpbounds verify: {sizes}: {len(result.frame):,} records on disk, {due}: "
         f"{counts['holds']:,} hold, {counts['inconclusive']:,} inconclusive, "
-        f"{counts['violated']:,} violated in {result.seconds:.1f} s{resumed}",
+        f"{counts['violated']:,} violated, {counts['error']:,} errors in "
+        f"{result.seconds:.1f} s{resumed}",
         highlight=False,
+        soft_wrap=True,
     )
     print_table(_summary_table(result.records()))
     if result.counterexamples:
         _print_counterexamples(result)
     console.print(f"records: {escape(str(result.out / 'records.csv'))}", highlight=False)
+    _say_errors(counts["error"])
+    if lacking:
+        names = ", ".join(f"{stem} ({k})" for stem, k in result.missing.items())
+        err_console.print(
+            f"lpbounds verify: error: records due are missing from {len(result.missing)} "
+            f"batch{'es' if len(result.missing) != 1 else ''}: {names}; run the same command "
+            "again to recompute them",
+            highlight=False,
+            soft_wrap=True,
+        )
 
 
-_STYLE = {"holds": "green", "inconclusive": "yellow", "violated": "bold red"}
+def _count(k: int, word: str) -> str:
+    return f"{k:,} {word}{'s' if k != 1 else ''}"
+
+
+def _say_errors(count: int) -> None:
+    """One line on stderr when records are errors (they also fail the exit status)."""
+    if count:
+        err_console.print(
+            f"lpbounds verify: {count:,} record{'s are errors' if count != 1 else ' is an error'} "
+            "(no verdict: a predicate raised, exited or returned none, or an instance could "
+            "not be checked); the error column says why",
+            highlight=False,
+            soft_wrap=True,
+        )
+
+
+_STYLE = {"holds": "green", "inconclusive": "yellow", "violated": "bold red", "error": "bold red"}
 
 
 def _verdict(v: str) -> str:
@@ -368,7 +420,8 @@ def _records_tables(records: list[dict]) -> list[Table]:
         if i == 0:
             title = (
                 f"lpbounds verify: {counts['holds']} hold, {counts['inconclusive']} "
-                f"inconclusive, {counts['violated']} violated\n\n{instance}"
+                f"inconclusive, {counts['violated']} violated, {counts['error']} errors"
+                f"\n\n{instance}"
             )
         table = Table(
             title=title,
@@ -400,6 +453,8 @@ def _records_tables(records: list[dict]) -> list[Table]:
 
 def _record_cells(r: dict) -> tuple[str, ...]:
     detail = r["detail"]
+    if r.get("error"):
+        detail = f"{detail}: {r['error']}" if detail else r["error"]
     if r["verdict"] == "violated":
         lo, hi = r["lp_interval"], r["exact_interval"]
         detail = (
@@ -427,16 +482,17 @@ def _summary_table(records: list[dict]) -> Table:
         show_edge=False,
         padding=(0, 1, 0, 0),
     )
-    for col in ("check", "solver", "holds", "inconclusive", "violated", "worst", "width", "acc."):
+    rows = summarize(records)
+    errors = any(row["error"] for row in rows)  # the column only where there are some
+    counts = ("holds", "inconclusive", "violated", *(["error"] if errors else []))
+    for col in ("check", "solver", *counts, "worst", "width", "acc."):
         summary.add_column(col, justify="left" if col in ("check", "solver", "worst") else "right")
-    for row in summarize(records):
+    for row in rows:
         summary.add_row(
-            row["check"],
+            escape(row["check"]),
             row["solver"],
-            str(row["holds"]),
-            str(row["inconclusive"]),
-            str(row["violated"]),
-            _verdict(row["verdict"]),
+            *(str(row[c]) for c in counts),
+            _verdict(str(row["verdict"])),
             fmt_sci(row["width"], 3),
             fmt_sci(row["accuracy"], 3),
         )

@@ -23,7 +23,9 @@ with ``Discrete`` observation and action spaces. The reading, entry by entry:
   (``mdp.sink`` is True, ``mdp.n_states = n + 1``): :meth:`FiniteMDP.user_values
   <lpbounds.model.mdp.FiniteMDP.user_values>`, ``user_bounds`` and ``user_policy`` drop
   it, so reported vectors have Gymnasium's ``n`` entries. Without any terminated
-  transition no sink is added (``sink="auto"``);
+  transition of positive probability no sink is added (``sink="auto"``): a terminated
+  entry of probability 0 is valid and changes nothing (it moves to the sink when there is
+  one, else it stays on its own next state, with probability 0 either way);
 * ``P`` is followed literally: the states where an episode ends (FrozenLake's holes and
   goal, whose every action is a terminated self-loop) keep their own entries, and no
   environment is special-cased;
@@ -34,7 +36,8 @@ with ``Discrete`` observation and action spaces. The reading, entry by entry:
 Every entry is validated: a probability is a finite real in ``[0, 1]``, a next state an
 integer in ``[0, n)``, a reward a finite real, ``terminated`` a bool; each pair's
 probabilities sum to one within :data:`~lpbounds.tolerances.PROBABILITY_SUM_ATOL`. A bad
-entry raises :class:`~lpbounds.errors.ValidationError` naming it as ``P[s][a][k]``.
+entry raises :class:`~lpbounds.errors.ValidationError` naming it as ``P[s][a][k]`` (or its
+pair as ``P[s][a]``), in the table's own words: never the arrays it is converted to.
 """
 
 from __future__ import annotations
@@ -178,15 +181,18 @@ def _read_entry(name: str, entry: Any, n: int) -> tuple[float, int, float, bool]
     return p, y, r, bool(done_raw)
 
 
+#: One entry of ``P`` as read: ``(s, a, next_state, prob, reward, terminated)``.
+Entry = tuple[int, int, int, float, float, bool]
+
+
 def _read_table(
     table: Any, n: int, m: int
-) -> tuple[list[tuple[int, int, int, float, float]], tuple[int, int, int] | None]:
-    """Rows ``(s, a, next, p, r)`` with ``next = -1`` for a terminated transition.
-
-    Also returns the first terminated entry ``(s, a, k)`` (None without one).
-    """
+) -> tuple[list[Entry], list[tuple[int, int, int]], tuple[int, int, int] | None]:
+    """The entries of ``P`` in order, their places ``(s, a, k)`` (to name them), and the
+    first terminated entry of positive probability ``(s, a, k)`` (None without one)."""
     _check_size(table, "P", "state", n)
-    rows: list[tuple[int, int, int, float, float]] = []
+    rows: list[Entry] = []
+    places: list[tuple[int, int, int]] = []
     first_done: tuple[int, int, int] | None = None
     for s in range(n):
         actions = _lookup(table, s, "P", "state", n)
@@ -208,13 +214,29 @@ def _read_table(
                 total += p
                 if done and p > 0.0 and first_done is None:
                     first_done = (s, a, k)
-                rows.append((s, a, -1 if done else y, p, r))
+                rows.append((s, a, y, p, r, done))
+                places.append((s, a, k))
             if abs(total - 1.0) > PROBABILITY_SUM_ATOL:
                 raise ValidationError(
                     f"P[{s}][{a}]: the probabilities of its {len(entries)} entries sum to "
                     f"{total:.12g}, not 1 (tolerance {PROBABILITY_SUM_ATOL:g})"
                 )
-    return rows, first_done
+    return rows, places, first_done
+
+
+def _transition_rows(rows: list[Entry], n: int, m: int, add_sink: bool) -> np.ndarray:
+    """``[s, a, next, p, r]`` rows for :func:`~lpbounds.model.interop.from_transitions`: a
+    terminated entry moves to the sink (index ``n``) when there is one; without one every
+    terminated entry has probability 0 (a positive one needs the sink) and keeps its own
+    next state, where it adds nothing. With the sink, its ``m`` self-loops come last."""
+    arr = np.array([row[:5] for row in rows], dtype=np.float64).reshape(-1, 5)
+    if add_sink:
+        done = np.array([row[5] for row in rows], dtype=bool)
+        arr[done, 2] = n
+        loops = np.zeros((m, 5))
+        loops[:, 0], loops[:, 1], loops[:, 2], loops[:, 3] = n, np.arange(m), n, 1.0
+        arr = np.concatenate([arr, loops])
+    return arr
 
 
 def from_gymnasium(
@@ -284,7 +306,7 @@ def from_gymnasium(
     table, holder = _find_table(env)
     n = _space_size(holder, env, "observation_space")
     m = _space_size(holder, env, "action_space")
-    rows, first_done = _read_table(table, n, m)
+    rows, places, first_done = _read_table(table, n, m)
     if first_done is not None and sink is False:
         s, a, k = first_done
         raise ValidationError(
@@ -292,15 +314,19 @@ def from_gymnasium(
             "the episode, which needs the end state (sink='auto' or True)"
         )
     add_sink = sink is True or (sink == "auto" and first_done is not None)
-    arr = np.array(rows, dtype=np.float64).reshape(-1, 5)
-    if add_sink:
-        arr[arr[:, 2] < 0, 2] = n
-        loops = np.zeros((m, 5))
-        loops[:, 0], loops[:, 1], loops[:, 2], loops[:, 3] = n, np.arange(m), n, 1.0
-        arr = np.concatenate([arr, loops])
-    built = cls.from_transitions(
-        arr, discount, n_states=n + int(add_sink), n_actions=m, action_names=action_names
-    )
+    arr = _transition_rows(rows, n, m, add_sink)
+
+    def entry(i: int) -> str:  # the user's own name of row i (the sink's loops come last)
+        if i < len(places):
+            return "P[{}][{}][{}]".format(*places[i])
+        return f"the end state's self-loop (action {i - len(places)})"
+
+    from .interop import from_transitions  # with scipy.sparse: only when a converter runs
+
+    built = from_transitions(
+        cls, arr, discount, n_states=n + int(add_sink), n_actions=m, action_names=action_names,
+        entry_name=entry,
+    )  # fmt: skip
     if not add_sink:
         return built
     return cls(

@@ -146,27 +146,24 @@ def _check_nonempty(
         )
 
 
-def _check_rows(
-    q: sp.csr_matrix,
-    pairs: tuple[np.ndarray, np.ndarray],
-    row_name: Callable[[int], str],
-    sink: bool,
-) -> np.ndarray:
-    """Finite, non-negative entries; rows summing to less than one only with a sink.
+def _check_rows(q: sp.csr_matrix, row_name: Callable[[int], str], sink: bool) -> np.ndarray:
+    """Finite, non-negative entries; rows summing to one (to less only with a sink).
 
-    Returns the probability each row misses (0 where complete). Rows summing to more
-    than one are left to :class:`~lpbounds.model.mdp.FiniteMDP`, which names them.
+    Returns the probability each row misses (0 where complete). A row summing to more
+    than one is refused here too, named in the input's own words (``row_name``), not left
+    to :class:`~lpbounds.model.mdp.FiniteMDP`, whose message would name its own array.
     """
     rows = np.repeat(np.arange(q.shape[0]), np.diff(q.indptr))
     _check_entries(rows, q.indices, q.data, row_name)
     missing = 1.0 - np.asarray(q.sum(axis=1)).ravel()
     short = missing > PROBABILITY_SUM_ATOL
-    if short.any() and not sink:
-        k = int(np.flatnonzero(short)[0])
-        x, u = int(pairs[0][k]), int(pairs[1][k])
+    off = (-missing > PROBABILITY_SUM_ATOL) | (short & (not sink))
+    if off.any():
+        k = int(np.flatnonzero(off)[0])
         raise ValidationError(
-            f"{row_name(k)}: probabilities[{x}, {u}, :] sum to {1.0 - missing[k]:.12g}, not 1 "
-            f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(short.sum())} such pairs): {_TERMINAL_HINT}"
+            f"{row_name(k)}: the probabilities sum to {1.0 - missing[k]:.12g}, not 1 "
+            f"(tolerance {PROBABILITY_SUM_ATOL:g}; {int(off.sum())} such pairs)"
+            + (f": {_TERMINAL_HINT}" if missing[k] > 0 else "")
         )
     return np.where(short, missing, 0.0)
 
@@ -234,7 +231,7 @@ def model_from_pairs(
         r = np.concatenate([r, np.zeros(extra.size)])
         q = sp.vstack([q, sp.csr_matrix((extra.size, n))], format="csr")
         row_name = _with_terminal_rows(row_name, len(s) - extra.size, s)
-    missing = _check_rows(q, (s, a), row_name, sink)
+    missing = _check_rows(q, row_name, sink)
     return _assemble(cls, q, s, a, r, missing, (n, m), discount, sink, sense, action_names)
 
 
@@ -793,19 +790,30 @@ def to_quantecon(mdp: FiniteMDP, form: str = "sa") -> Any:
 
 # ---------------------------------------------------------------------- MDPSolver
 def _index_column(
-    rows: np.ndarray, c: int, what: str, hi: int | None, name: str = "rows"
+    rows: np.ndarray,
+    c: int,
+    what: str,
+    hi: int | None,
+    name: str = "rows",
+    entry: Callable[[int], str] | None = None,
 ) -> np.ndarray:
+    """Column ``c`` of ``rows`` as indices in ``[0, hi)``; a bad one is named
+    ``name[i, c]``, or ``entry(i)`` (the caller's own name of row ``i``)."""
     col = rows[:, c]
+
+    def where(i: int) -> str:
+        return f"{name}[{i}, {c}]" if entry is None else f"{entry(i)}: the {what}"
+
     frac = ~np.isfinite(col) | (col != np.round(col)) if col.dtype.kind == "f" else None
     if frac is not None and frac.any():
         i = int(np.flatnonzero(frac)[0])
-        raise ValidationError(f"{name}[{i}, {c}] = {col[i]} is not a whole number (the {what})")
+        raise ValidationError(f"{where(i)} = {col[i]} is not a whole number (the {what})")
     col = col.astype(np.int64)
     bad = (col < 0) | (col >= hi) if hi is not None else col < 0
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         rng = f"[0, {hi})" if hi is not None else ">= 0"
-        raise ValidationError(f"{name}[{i}, {c}] = {int(col[i])}: the {what} is out of range {rng}")
+        raise ValidationError(f"{where(i)} = {int(col[i])}: the {what} is out of range {rng}")
     return col
 
 
@@ -920,8 +928,13 @@ def from_transitions(
     terminal_reward: str = "keep",
     sense: str = "max",
     action_names: Any = None,
+    entry_name: Callable[[int], str] | None = None,
 ) -> FiniteMDP:
     """The converter of :meth:`FiniteMDP.from_transitions`.
+
+    ``entry_name`` : callable, optional
+        ``entry_name(i)``: how the caller's own input names ``rows[i]`` in messages (a
+        converter built on this one: Gymnasium's ``P[s][a][k]``); default ``rows[i]``.
 
     Which pairs are available:
 
@@ -956,9 +969,10 @@ def from_transitions(
     tr = np.asarray(tr, dtype=np.float64)
     hi_s = None if n_states is None else check_int("n_states", n_states, lo=1)
     hi_a = None if n_actions is None else check_int("n_actions", n_actions, lo=1)
-    s = _index_column(tr, 0, "state", hi_s)
-    a = _index_column(tr, 1, "action", hi_a)
-    nxt = _index_column(tr, 2, "next state", hi_s)
+    s = _index_column(tr, 0, "state", hi_s, entry=entry_name)
+    a = _index_column(tr, 1, "action", hi_a, entry=entry_name)
+    nxt = _index_column(tr, 2, "next state", hi_s, entry=entry_name)
+    row = (lambda i: f"rows[{i}]") if entry_name is None else entry_name
     n = hi_s if hi_s is not None else int(max(s.max(), nxt.max())) + 1
     m = hi_a if hi_a is not None else int(a.max()) + 1
     _check_size((n, m))
@@ -968,7 +982,8 @@ def from_transitions(
     neg = p < -PROBABILITY_NEGATIVE_ATOL
     if neg.any():
         i = int(np.flatnonzero(neg)[0])
-        raise ValidationError(f"rows[{i}, 3] = {p[i]}: a probability is negative")
+        where = f"rows[{i}, 3]" if entry_name is None else f"{row(i)}: the probability"
+        raise ValidationError(f"{where} = {p[i]}: a probability is negative")
     q = sp.csr_matrix((p, (inv, nxt)), shape=(key.size, n))  # repeated next states add up
     if tr.shape[1] == 5:
         if rewards is not None or reward_rows is not None:
@@ -978,7 +993,7 @@ def from_transitions(
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise ValidationError(
-                f"rows[{i}]: probability {p[i]} times reward {tr[i, 4]} is not finite"
+                f"{row(i)}: probability {p[i]} times reward {tr[i, 4]} is not finite"
             )
         r = np.bincount(inv, weights=pr, minlength=key.size)
         given, drop = _NONE_GIVEN, ""
@@ -996,7 +1011,7 @@ def from_transitions(
             return given.name(k - k0)
         return (
             f"the rows of pair (state {pair_s[k]}, action {pair_a[k]}) "
-            f"(first: rows[{first_row[k]}])"
+            f"(first: {row(int(first_row[k]))})"
         )
 
     return model_from_pairs(

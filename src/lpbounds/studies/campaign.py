@@ -34,25 +34,47 @@ Instances
 Batches, disk and resuming
     The instances run in batches of ``batch_size`` consecutive indices, serially, on one of
     Dask's local schedulers or on a Dask cluster (``scheduler``: the helper
-    :func:`lpbounds.studies.compare.dask_map` that ``compare`` uses). With ``out``, each
-    finished batch is written at once (``batches/batch-NNNNNN.csv`` or ``.parquet``,
-    atomically), so an interrupted campaign keeps what it finished; running it again with
-    the same arguments into the same folder skips the batches on disk and ends with the
-    same records as an uninterrupted run. At the end ``out`` holds ``records.csv`` (and
-    ``records.parquet``), ``summary.csv`` (per claim and solver,
-    :func:`~lpbounds.studies.verify.summarize`), ``counterexamples/`` (shrunk instances as
-    model files, ``counterexamples.csv``), ``campaign.json`` (the arguments) and
-    ``metadata.json`` (versions, machine, command line, as ``compare`` writes them).
+    :func:`lpbounds.studies.compare.dask_map` that ``compare`` uses; checked, and an address
+    connected to, before anything is written). With ``out``, each finished batch is written
+    at once (``batches/batch-NNNNNN.csv`` or ``.parquet``, atomically) with its entry in
+    ``manifest.json`` (atomically, before the file is renamed into place: file name, number
+    of records, instance range, SHA-256, lpbounds version and the fingerprints of its
+    claims), so an interrupted campaign keeps what it finished. ``campaign.json`` records
+    the arguments, the lpbounds version and every claim's fingerprint
+    (:func:`~lpbounds.studies.claims.claim_fingerprint`).
+
+    Running it again with the same arguments into the same folder resumes it, and every
+    batch on disk is checked against the manifest first (its entry, the hash, the
+    instances, that it parses, the count, a record for each (instance, claim, solver)
+    due): one that fails is named in a note, moved into ``rejected/`` (never
+    deleted) and recomputed, so the campaign ends with the same records as an
+    uninterrupted run. A folder whose ``campaign.json`` or manifest cannot be read, written
+    before the manifest existed, holding other arguments, or whose claims (a conjecture's
+    source, the lpbounds version) changed since is refused with nothing changed; with
+    ``rerun_changed`` the changed claims' records are recomputed instead (the old files
+    moved into ``rejected/``). At the end the
+    records on disk, read back and checked, are counted against those due
+    (:meth:`Batch.due`): batches that lack some are named in ``CampaignResult.missing`` and
+    fail the campaign. ``out`` then holds ``records.csv`` (and ``records.parquet``),
+    ``summary.csv`` (per claim and solver, :func:`~lpbounds.studies.verify.summarize`),
+    ``counterexamples/`` (shrunk instances as model files, ``counterexamples.csv``),
+    ``campaign.json``, ``manifest.json`` and ``metadata.json`` (versions, machine, command
+    line, as ``compare`` writes them; the records due and missing; the run's notes).
 
 Shrinking
     Every *violated* record (with ``shrink_inconclusive``, every *inconclusive* one too) is
     shrunk (:func:`lpbounds.studies.shrink.shrink`) while the verdict of that claim and
     solver stays the same, and the smallest instance found is written as a model file that
-    ``lpbounds solve`` and ``lpbounds verify`` read.
+    ``lpbounds solve`` and ``lpbounds verify`` read. The start is re-tested first (nothing is
+    written when it does not show the verdict), and each file is loaded back and the claim
+    run on it again before it is reported (also a file from an earlier run).
 
 Record columns: :data:`CAMPAIGN_COLUMNS` (:data:`~lpbounds.studies.verify.RECORD_COLUMNS`,
 ``error``, then the instance's :data:`INSTANCE_COLUMNS`); :data:`TIMING_COLUMNS` are the
-only ones that differ between two runs of one campaign.
+only ones that differ between two runs of one campaign. ``verdict`` is one of
+:data:`~lpbounds.studies.verify.OUTCOMES`: an *error* record (a predicate that raised,
+exited or returned no verdict; an instance that could not be built or checked) says why in
+``error``.
 """
 
 from __future__ import annotations
@@ -63,23 +85,26 @@ import os
 import re
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._defaults import VERSION
 from ..errors import OutputError, SolverNotInstalledError, ValidationError
 from ..formulations import resolve_solver
 from ..model.generators import garnet, random_partition
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
-from ..outputs import write_atomic, write_text_atomic
-from ..status import Verdict
+from ..outputs import file_sha256, write_atomic, write_text_atomic
 from ..tolerances import LP_COMPARE_RTOL
 from .claims import (
     REMARK2,
+    BuiltinClaim,
     Claim,
+    Conjecture,
+    claim_fingerprint,
     claim_names,
     resolve_claims,
     run_claims,
@@ -88,11 +113,14 @@ from .claims import (
 from .shrink import shrink, size_of, write_model
 from .verify import (
     INSTANCE_CHECKS,
+    OUTCOMES,
     RECORD_COLUMNS,
     Record,
     VerifyInstance,
     check_exact_method,
     default_solvers,
+    due_solvers,
+    error_record,
     exact_interval,
     exit_status,
     records_frame,
@@ -104,10 +132,14 @@ if TYPE_CHECKING:  # annotations only
 
 __all__ = [
     "CAMPAIGN_COLUMNS",
+    "CAMPAIGN_FILE",
     "FAMILIES",
     "FAMILY_WEIGHTS",
+    "FOLDER_VERSION",
     "INSTANCE_COLUMNS",
+    "MANIFEST_FILE",
     "PARTITION_KINDS",
+    "REJECTED_DIR",
     "TIMING_COLUMNS",
     "Batch",
     "CampaignInstance",
@@ -387,62 +419,95 @@ class Batch:
         """The batch file's name without suffix."""
         return "remark2" if self.number < 0 else f"batch-{self.number:06d}"
 
+    @property
+    def instances(self) -> list[int] | None:
+        """``[first, last]`` campaign index of its instances (None for Remark 2)."""
+        return None if self.number < 0 else [self.items[0][0], self.items[-1][0]]
 
-#: The ``claim`` of the record of an instance that could not be built or checked.
+    def due(self) -> set[tuple[int, str, str]]:
+        """The ``(campaign_index, check, solver)`` that must each have a record or more:
+        every instance x claim x solver (a built-in check's solvers:
+        :func:`~lpbounds.studies.verify.due_solvers`; a solver-free conjecture: "exact"),
+        and Remark 2 once per solver (``campaign_index`` -1)."""
+        if self.number < 0:
+            return {(-1, REMARK2, s) for s in self.solvers} if self._has_remark2() else set()
+        per = [(c.name, s) for c in self.claims if c.name != REMARK2 for s in _solvers_of(c, self)]
+        return {(k, name, s) for k, _, _ in self.items for name, s in per}
+
+    def _has_remark2(self) -> bool:
+        return any(c.name == REMARK2 for c in self.claims)
+
+
+def _solvers_of(claim: Claim, batch: Batch) -> list[str]:
+    """The solvers a claim gives records for on one instance (see :meth:`Batch.due`)."""
+    if isinstance(claim, BuiltinClaim):
+        return due_solvers(claim.name, batch.solvers)
+    return list(batch.solvers) if claim.uses_solver else ["exact"]
+
+
+#: The ``claim`` of the records of an instance that could not be built or checked.
 NOT_CHECKED = "the instance could not be checked"
 
 
-def _not_checked(inst_name: str, claim: Claim, error: str) -> Record:
-    nan = float("nan")
-    return {
-        "check": claim.name,
-        "claim": NOT_CHECKED,
-        "instance": inst_name,
-        "solver": "exact",
-        "verdict": Verdict.INCONCLUSIVE,
-        "width": nan,
-        "deviation": nan,
-        "accuracy": nan,
-        "index": 0,
-        "lp_interval": [nan, nan],
-        "exact_interval": [nan, nan],
-        "detail": "",
-        "error": error,
-    }
+def _in_record_order(claims: Sequence[Claim]) -> list[Claim]:
+    """Claims in the order of their records on an instance: the built-in checks in
+    :data:`~lpbounds.studies.verify.INSTANCE_CHECKS` order, then the conjectures."""
+    builtin = {c.name: c for c in claims if isinstance(c, BuiltinClaim) and c.name != REMARK2}
+    return [
+        *(builtin[c] for c in INSTANCE_CHECKS if c in builtin),
+        *(c for c in claims if isinstance(c, Conjecture)),
+    ]
+
+
+def _not_checked(name: str, claims: Sequence[Claim], batch: Batch, error: str) -> list[Record]:
+    """The *error* records of an instance whose claims could not be checked: one per
+    (claim, solver) due, so that the claim still has its records."""
+    return [
+        error_record(c.name, NOT_CHECKED, name, s, error, "the instance could not be checked")
+        for c in _in_record_order(claims)
+        for s in _solvers_of(c, batch)
+    ]
+
+
+def _raised(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
 
 
 def run_batch(batch: Batch) -> list[Record]:
     """The records of one batch (a module-level function: Dask ships it to workers).
 
     Each instance's costs are seeded by its own seed, so a record depends on ``(family,
-    seed)``, the claims, the solvers, ``n_costs`` and ``rtol`` only. An instance that cannot
-    be built or checked (an exception outside a conjecture's predicate) gives one
-    *inconclusive* record per claim whose ``error`` says what was raised.
+    seed)``, the claims, the solvers, ``n_costs`` and ``rtol`` only. An instance that
+    cannot be built gives an *error* record for every (claim, solver) due, whose ``error``
+    says what was raised; one whose built-in checks raise, such records for the built-in
+    checks (its conjectures still run: each is sandboxed, :mod:`~lpbounds.studies.claims`).
     """
     claims = list(batch.claims)
     if batch.number < 0:
         records = run_remark2(claims, batch.solvers, seed=batch.seed, rtol=batch.rtol)
         return [{**r, "campaign_index": -1} for r in records]
+    builtin = [c for c in _in_record_order(claims) if isinstance(c, BuiltinClaim)]
+    conjectures = [c for c in claims if isinstance(c, Conjecture)]
+    kw: dict[str, Any] = {"n_costs": batch.n_costs, "rtol": batch.rtol}
+    kw["exact_method"] = batch.exact_method
     out: list[Record] = []
     for k, family, seed in batch.items:
         name = f"{family}:{seed}"
         try:
             inst = campaign_instance(family, seed)
-            found = run_claims(
-                inst,
-                claims,
-                batch.solvers,
-                n_costs=batch.n_costs,
-                seed=seed,
-                rtol=batch.rtol,
-                exact_method=batch.exact_method,
-            )
-            extra: dict[str, Any] = inst.params
         except Exception as exc:  # a finding: the campaign goes on with the other instances
-            error = f"{type(exc).__name__}: {exc}"
-            found = [_not_checked(name, c, error) for c in claims if c.name != REMARK2]
-            extra = {"family": family, "seed": seed}
-        out += [{**r, **extra, "campaign_index": k} for r in found]
+            found = _not_checked(name, claims, batch, _raised(exc))
+            out += [{**r, "family": family, "seed": seed, "campaign_index": k} for r in found]
+            continue
+        found = []
+        if builtin:
+            try:
+                found += run_claims(inst, builtin, batch.solvers, seed=seed, **kw)
+            except Exception as exc:  # a crash of a built-in check: a finding too
+                found += _not_checked(name, builtin, batch, _raised(exc))
+        if conjectures:  # sandboxed: a predicate's crash is its record's error
+            found += run_claims(inst, conjectures, batch.solvers, seed=seed, **kw)
+        out += [{**r, **inst.params, "campaign_index": k} for r in found]
     return out
 
 
@@ -459,12 +524,29 @@ def _frame(records: Sequence[Record]) -> pd.DataFrame:
     return frame
 
 
-def _write_frame(frame: pd.DataFrame, path: Path) -> None:
-    """Write a table atomically (CSV with ``nan`` for missing numbers, or Parquet)."""
-    if path.suffix == ".csv":
-        write_text_atomic(path, frame.to_csv(index=False, na_rep="nan"))
-    else:
-        write_atomic(path, lambda tmp: frame.to_parquet(tmp, index=False))
+def _write_frame(
+    frame: pd.DataFrame, path: Path, before_rename: Callable[[str], None] | None = None
+) -> str:
+    """Write a table atomically (CSV with ``nan`` for missing numbers, or Parquet); the
+    SHA-256 of the bytes written, hashed from the temporary file, which is handed to
+    ``before_rename`` before that file is renamed into place (if it raises, ``path`` is
+    left as it was)."""
+    digest: list[str] = []
+
+    def write(tmp: Path) -> None:
+        if path.suffix == ".csv":
+            with open(tmp, "w", newline="") as fh:
+                frame.to_csv(fh, index=False, na_rep="nan")
+                fh.flush()
+                os.fsync(fh.fileno())
+        else:
+            frame.to_parquet(tmp, index=False)
+        digest.append(file_sha256(tmp))
+        if before_rename is not None:
+            before_rename(digest[0])
+
+    write_atomic(path, write)
+    return digest[0]
 
 
 def _read_frame(path: Path) -> pd.DataFrame:
@@ -481,30 +563,6 @@ def _read_frame(path: Path) -> pd.DataFrame:
     )  # pandas' default float parser reads repr() back exactly (its "round_trip")
 
 
-def read_records(out: str | Path) -> pd.DataFrame:
-    """A campaign's records from its folder: the batch files on disk, in campaign order
-    (also of an unfinished campaign).
-
-    Parameters
-    ----------
-    out : str or Path
-        The campaign's ``out`` folder.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns :data:`CAMPAIGN_COLUMNS`.
-    """
-    import pandas as pd
-
-    folder = Path(out) / "batches"
-    files = sorted(p for p in folder.glob("batch-*") if p.suffix in (".csv", ".parquet"))
-    files += [p for p in (folder / "remark2.csv", folder / "remark2.parquet") if p.exists()]
-    if not files:
-        return _frame([])
-    return pd.concat([_read_frame(p) for p in files], ignore_index=True)
-
-
 def _check_parquet(fmt: str) -> None:
     if fmt not in ("csv", "parquet"):
         raise ValidationError(f"fmt must be 'csv' or 'parquet'; got {fmt!r}")
@@ -517,29 +575,402 @@ def _check_parquet(fmt: str) -> None:
             ) from exc
 
 
-def _open_folder(out: Path, params: dict[str, Any]) -> None:
-    """Create ``out`` for a new campaign, or check that it holds this one (to resume)."""
-    manifest = out / "campaign.json"
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"out: {str(out)!r} is not a folder")
-    if manifest.exists():
-        old = json.loads(manifest.read_text())
-        diff = [k for k in params if old.get(k) != params[k]]
-        if diff:
-            k = diff[0]
-            raise ValidationError(
-                f"out: {str(out)!r} holds a campaign with other arguments ({k} = "
-                f"{old.get(k)!r}, now {params[k]!r}): rerun with its arguments to resume it, "
-                "or give another folder"
-            )
-        return
-    if out.exists() and any(out.iterdir()):
+# ---------------------------------------------------------------------- the folder
+#: The layout version of a campaign folder written here: ``campaign.json`` (arguments,
+#: lpbounds version, claims' fingerprints) and ``manifest.json`` (one entry per batch
+#: file). Folders written before (no version, no manifest) are refused on resume.
+FOLDER_VERSION = 2
+#: The campaign's arguments, lpbounds version and claims' fingerprints.
+CAMPAIGN_FILE = "campaign.json"
+#: One entry per batch written: file, records, instances, SHA-256, lpbounds, claims.
+MANIFEST_FILE = "manifest.json"
+#: Where files that fail their check on resume are moved (never deleted).
+REJECTED_DIR = "rejected"
+
+#: A note of a campaign for its user, one line (a batch recomputed, a counterexample not
+#: reproduced): ``notify(line)``.
+CampaignNote = Callable[[str], None]
+
+_HEX = re.compile(r"[0-9a-f]{64}")
+
+
+def _unreadable(path: Path, why: str) -> OutputError:
+    return OutputError(
+        f"out: {str(path)!r} cannot be read ({why}); nothing was changed: restore it, or "
+        "run the campaign into another folder"
+    )
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    """A JSON object from ``path``; OutputError naming the file when it cannot be read."""
+    try:
+        data = json.loads(path.read_bytes())
+    except FileNotFoundError:
+        raise _unreadable(path, "no such file") from None
+    except OSError as exc:
+        raise _unreadable(path, exc.strerror or type(exc).__name__) from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise _unreadable(path, f"not valid JSON: {' '.join(str(exc).split())[:120]}") from None
+    if not isinstance(data, dict):
+        raise _unreadable(path, f"a JSON {type(data).__name__}, not an object")
+    return data
+
+
+def _checked_manifest(path: Path, data: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The batch entries of a manifest, each of the right shape (else OutputError)."""
+    batches = data.get("batches")
+    if data.get("campaign_folder") != FOLDER_VERSION or not isinstance(batches, dict):
+        raise _unreadable(path, f"not a campaign manifest of layout {FOLDER_VERSION}")
+    for stem, e in batches.items():
+        span = e.get("instances") if isinstance(e, dict) else None
+        ok = (
+            isinstance(e, dict)
+            and isinstance(e.get("file"), str)
+            and Path(e["file"]).stem == stem
+            and isinstance(e.get("records"), int)
+            and (span is None or (isinstance(span, list) and len(span) == 2))
+            and isinstance(e.get("sha256"), str)
+            and _HEX.fullmatch(e["sha256"]) is not None
+            and isinstance(e.get("lpbounds"), str)
+            and isinstance(e.get("claims"), dict)
+        )
+        if not ok:
+            raise _unreadable(path, f"its entry {stem!r} is malformed")
+    return batches
+
+
+def _changed_claims(old: dict[str, Any], new: dict[str, dict[str, Any]]) -> list[tuple[str, str]]:
+    """``(claim, what changed)`` for each claim whose fingerprint differs."""
+    out = []
+    for name, fp in new.items():
+        before = old.get(name)
+        if before == fp:
+            continue
+        if not isinstance(before, dict) or before.get("kind") != fp.get("kind"):
+            out.append((name, "it was another kind of claim"))
+            continue
+        diff = [k for k in fp if before.get(k) != fp[k]]
+        what = "; ".join(
+            f"SHA-256 of {fp['source']!r} {str(before.get(k))[:12]}... then, "
+            f"{str(fp[k])[:12]}... now"
+            if k == "sha256"
+            else f"{k} {before.get(k)!r} then, {fp[k]!r} now"
+            for k in diff
+        )
+        out.append((name, what))
+    return out
+
+
+@dataclass
+class _Folder:
+    """A campaign's folder: its manifest's entries (kept in step with the batch files)."""
+
+    path: Path
+    fmt: str
+    fingerprints: dict[str, dict[str, Any]]
+    entries: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    @property
+    def batches(self) -> Path:
+        return self.path / "batches"
+
+    def file(self, stem: str) -> Path:
+        return self.batches / f"{stem}.{self.fmt}"
+
+    def save_manifest(self) -> None:
+        data = {"campaign_folder": FOLDER_VERSION, "batches": self.entries}
+        write_text_atomic(self.path / MANIFEST_FILE, json.dumps(data, indent=1) + "\n")
+
+    def write(self, batch: Batch, frame: pd.DataFrame) -> None:
+        """The batch file with its manifest entry, each atomically: the entry is written
+        while the file is still a temporary one, then the file is renamed into place. So a
+        batch file on disk has its entry whenever the run stops (Ctrl-C, a kill); an entry
+        whose file is missing or differs (stopped in between) is recomputed on resume."""
+        path, stem = self.file(batch.stem), batch.stem
+        before = self.entries.get(stem)
+
+        def record(digest: str) -> None:
+            self.entries[stem] = {
+                "file": path.name,
+                "records": len(frame),
+                "instances": batch.instances,
+                "sha256": digest,
+                "lpbounds": VERSION,
+                "claims": {c.name: self.fingerprints[c.name] for c in batch.claims},
+            }
+            try:
+                self.save_manifest()
+            except BaseException:  # the file is not renamed: its entry is not kept either
+                if before is None:
+                    self.entries.pop(stem, None)
+                else:
+                    self.entries[stem] = before
+                raise
+
+        _write_frame(frame, path, record)
+
+    def aside(self, path: Path) -> Path:
+        """Move ``path`` into ``rejected/`` under a free name (never over another)."""
+        where = self.path / REJECTED_DIR
+        where.mkdir(exist_ok=True)
+        target = where / path.name
+        k = 1
+        while target.exists():
+            k += 1
+            target = where / f"{path.stem}-{k}{path.suffix}"
+        os.replace(path, target)
+        return target
+
+    def read(self, batch: Batch) -> tuple[pd.DataFrame | None, str]:
+        """The batch's records as verified against the manifest: ``(frame, "")``, or
+        ``(None, why not)``. Checked: the entry and the file exist, the file's SHA-256,
+        its instances, that it parses, its number of records, that every record is of one
+        of its instances and every (instance, claim, solver) due has one."""
+        entry, path = self.entries.get(batch.stem), self.file(batch.stem)
+        if entry is None:
+            return None, "is not in the manifest"
+        if not path.exists():
+            return None, "is listed in the manifest but missing"
+        if entry["file"] != path.name or entry["instances"] != batch.instances:
+            return None, "does not match its manifest entry (another file or other instances)"
+        if file_sha256(path) != entry["sha256"]:
+            return None, "does not match the manifest (its SHA-256 differs)"
+        try:
+            frame = _read_frame(path)
+        except Exception as exc:  # what the parser says of a file that is not a table
+            return None, f"cannot be read ({type(exc).__name__})"
+        if len(frame) != entry["records"] or "campaign_index" not in frame:
+            return None, f"holds {len(frame)} records, the manifest says {entry['records']}"
+        ks = {-1} if batch.number < 0 else {k for k, _, _ in batch.items}
+        if not set(frame["campaign_index"].astype(int)) <= ks:
+            return None, "holds records of instances outside it"
+        return frame, ""
+
+
+def _init_folder(out: Path, params: dict[str, Any], fps: dict[str, Any], fmt: str) -> _Folder:
+    """A new campaign in ``out`` (absent, empty, or left by an initialisation that was
+    interrupted): ``batches/``, an empty manifest, then ``campaign.json``, which marks the
+    folder as a campaign's."""
+    leftovers = [p for p in out.iterdir() if not p.name.startswith(".")] if out.exists() else []
+    ours = {"batches", MANIFEST_FILE}
+    if any(p.name not in ours for p in leftovers) or any(
+        p.is_dir() and any(p.iterdir()) for p in leftovers
+    ):
         raise OutputError(
-            f"out: {str(out)!r} is not empty and holds no campaign (no campaign.json): "
+            f"out: {str(out)!r} is not empty and holds no campaign (no {CAMPAIGN_FILE}): "
             "give a new or empty folder"
         )
-    (out / "batches").mkdir(parents=True, exist_ok=True)
-    write_text_atomic(manifest, json.dumps(params, indent=2) + "\n")
+    folder = _Folder(out, fmt, fps)
+    folder.batches.mkdir(parents=True, exist_ok=True)
+    folder.save_manifest()
+    write_text_atomic(out / CAMPAIGN_FILE, json.dumps(_campaign_file(params, fps), indent=2) + "\n")
+    return folder
+
+
+def _campaign_file(params: dict[str, Any], fps: dict[str, Any]) -> dict[str, Any]:
+    return {
+        "campaign_folder": FOLDER_VERSION,
+        "arguments": params,
+        "lpbounds": VERSION,
+        "claims": fps,
+    }
+
+
+def _open_folder(
+    out: Path, params: dict[str, Any], fps: dict[str, Any], rerun_changed: bool
+) -> tuple[_Folder, list[str]]:
+    """Create ``out`` for a new campaign, or check that it holds this one: its
+    ``campaign.json`` and manifest readable, the same arguments, lpbounds version and
+    claims (a changed claim only with ``rerun_changed``, which records the new ones).
+    Returns the folder and the notes of what changed. Nothing is written when refused."""
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"out: {str(out)!r} is not a folder")
+    if not (out / CAMPAIGN_FILE).exists():
+        return _init_folder(out, params, fps, params["format"]), []
+    meta = _read_json(out / CAMPAIGN_FILE)
+    if "campaign_folder" not in meta and {"n", "seed", "claims"} <= set(meta):
+        raise OutputError(
+            f"out: {str(out)!r} holds a campaign written before campaigns kept a manifest "
+            "(its batches cannot be checked): move it aside and run the campaign into a new "
+            "folder, where its records are recomputed"
+        )
+    args, version, old_fps = meta.get("arguments"), meta.get("lpbounds"), meta.get("claims")
+    if meta.get("campaign_folder") != FOLDER_VERSION or not (
+        isinstance(args, dict) and isinstance(version, str) and isinstance(old_fps, dict)
+    ):
+        raise _unreadable(out / CAMPAIGN_FILE, f"not a campaign file of layout {FOLDER_VERSION}")
+    diff = [k for k in params if args.get(k) != params[k]]
+    if diff:
+        k = diff[0]
+        raise ValidationError(
+            f"out: {str(out)!r} holds a campaign with other arguments ({k} = "
+            f"{args.get(k)!r}, now {params[k]!r}): rerun with its arguments to resume it, "
+            "or give another folder"
+        )
+    entries = _checked_manifest(out / MANIFEST_FILE, _read_json(out / MANIFEST_FILE))
+    changed = [("lpbounds", f"{version} then, {VERSION} now")] if version != VERSION else []
+    changed += _changed_claims(old_fps, fps)
+    if changed and not rerun_changed:
+        name, what = changed[0]
+        subject = "lpbounds itself" if name == "lpbounds" else f"the claim {name!r}"
+        raise ValidationError(
+            f"out: {subject} changed since the campaign's records were made ({what}): they "
+            "would be reported as the new one's; rerun_changed=True (--rerun-changed) "
+            "recomputes the records it changed, or restore it to resume"
+        )
+    if changed:
+        write_text_atomic(
+            out / CAMPAIGN_FILE, json.dumps(_campaign_file(params, fps), indent=2) + "\n"
+        )
+    notes = [
+        f"{n if n == 'lpbounds' else repr(n)} changed ({w}): its records are recomputed"
+        for n, w in changed
+    ]
+    return _Folder(out, params["format"], fps, dict(entries)), notes
+
+
+def read_records(out: str | Path) -> pd.DataFrame:
+    """A campaign's records from its folder, verified: the batch files its manifest
+    lists, in campaign order (also of an unfinished campaign), each checked against its
+    entry (SHA-256, number of records) as it is read.
+
+    Parameters
+    ----------
+    out : str or Path
+        The campaign's ``out`` folder.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns :data:`CAMPAIGN_COLUMNS`.
+
+    Raises
+    ------
+    OutputError
+        No readable manifest, or a batch that does not match it (named).
+    """
+    import pandas as pd
+
+    folder = Path(out)
+    entries = _checked_manifest(folder / MANIFEST_FILE, _read_json(folder / MANIFEST_FILE))
+    frames = []
+    for stem in sorted(entries, key=lambda s: (s == "remark2", s)):
+        entry, path = entries[stem], folder / "batches" / entries[stem]["file"]
+        if not path.exists() or file_sha256(path) != entry["sha256"]:
+            raise OutputError(f"{str(path)!r} does not match the campaign's manifest")
+        frame = _read_frame(path)
+        if len(frame) != entry["records"]:
+            raise OutputError(
+                f"{str(path)!r} holds {len(frame)} records, the manifest says {entry['records']}"
+            )
+        frames.append(frame)
+    return pd.concat(frames, ignore_index=True) if frames else _frame([])
+
+
+# ---------------------------------------------------------------------- resuming
+def _merge(old: pd.DataFrame, new: pd.DataFrame, batch: Batch, redone: set[str]) -> pd.DataFrame:
+    """A batch's records with those of the claims ``redone`` replaced by ``new``, in the
+    order an uninterrupted run gives them (by instance, then claim: built-in checks
+    first, then the conjectures in their order)."""
+    import pandas as pd
+
+    group = {
+        c.name: 1 + j for j, c in enumerate(c for c in batch.claims if isinstance(c, Conjecture))
+    }
+    kept = old[~old["check"].isin(list(redone))]
+    both = pd.concat([kept, new.astype(kept.dtypes.to_dict(), errors="ignore")], ignore_index=True)
+    pos = {k: j for j, (k, _, _) in enumerate(batch.items)}
+    key = pd.DataFrame({
+        "k": both["campaign_index"].astype(int).map(pos),
+        "g": both["check"].map(lambda c: group.get(c, 0)),
+    })  # fmt: skip
+    order = key.sort_values(["k", "g"], kind="stable").index
+    return both.loc[order].reset_index(drop=True)[list(CAMPAIGN_COLUMNS)]
+
+
+@dataclass
+class _Work:
+    """What a run does with one batch: compute it (``redo`` None: all its claims; else
+    those claims only, merged into ``kept``), or keep it (``done``)."""
+
+    batch: Batch
+    done: bool = False
+    kept: pd.DataFrame | None = None
+    redo: set[str] | None = None
+
+
+def _plan_work(folder: _Folder, batches: list[Batch], note: CampaignNote) -> list[_Work]:
+    """Check every batch on disk against the manifest: a batch that passes is kept (or,
+    where some of its claims changed since it was written, those are redone); one that
+    fails is named, moved aside and recomputed; a file that is not a batch of this
+    campaign is moved aside. One note per file moved or batch redone."""
+    work, replaced = [], 0
+    planned = {folder.file(b.stem).name for b in batches}
+    for path in sorted(folder.batches.iterdir()):
+        if path.name not in planned:
+            what = (
+                "is an unfinished write of an interrupted run"
+                if path.name.startswith(".") and path.suffix == ".tmp"
+                else "is not a batch of this campaign"
+            )
+            note(f"batches/{path.name} {what}: moved to {_rel(folder, folder.aside(path))}")
+    for b in batches:
+        path = folder.file(b.stem)
+        if b.stem not in folder.entries and not path.exists():
+            work.append(_Work(b))
+            continue
+        frame, why = folder.read(b)
+        if frame is None:
+            gone = f": moved to {_rel(folder, folder.aside(path))}" if path.exists() else ""
+            folder.entries.pop(b.stem, None)
+            note(f"{path.name} {why}{gone}; it is recomputed")
+            work.append(_Work(b))
+            continue
+        entry, fps = folder.entries[b.stem], folder.fingerprints
+        changed = {
+            c.name
+            for c in b.claims
+            if entry["lpbounds"] != VERSION or entry["claims"].get(c.name) != fps[c.name]
+        }
+        missing = b.due() - _present(frame)
+        if missing:
+            where = _rel(folder, folder.aside(path))
+            note(
+                f"{path.name} lacks the records of {len(missing)} (instance, claim, solver) "
+                f"due: moved to {where}; it is recomputed"
+            )
+            folder.entries.pop(b.stem)
+            work.append(_Work(b))
+        elif not changed:
+            work.append(_Work(b, done=True, kept=frame))
+        else:  # the old records are kept aside; the batch is rewritten
+            folder.aside(path)
+            folder.entries.pop(b.stem)
+            replaced += 1
+            if b.number < 0 or changed >= {c.name for c in b.claims}:
+                work.append(_Work(b))  # every claim changed: computed again
+            else:
+                work.append(_Work(b, kept=frame, redo=changed))
+    if replaced:
+        note(
+            f"{replaced} batch file{'s' if replaced != 1 else ''} held records of changed "
+            f"claims: moved to {REJECTED_DIR}/, their records recomputed"
+        )
+    stems = {b.stem for b in batches}
+    for stem in [s for s in folder.entries if s not in stems]:
+        del folder.entries[stem]
+        note(f"the manifest's entry {stem!r} is not a batch of this campaign: dropped")
+    folder.save_manifest()
+    return work
+
+
+def _rel(folder: _Folder, path: Path) -> str:
+    return str(path.relative_to(folder.path))
+
+
+def _present(frame: pd.DataFrame) -> set[tuple[int, str, str]]:
+    cols = zip(frame["campaign_index"].astype(int), frame["check"], frame["solver"], strict=True)
+    return {(int(k), str(c), str(s)) for k, c, s in cols}
 
 
 # ---------------------------------------------------------------------- running batches
@@ -564,6 +995,87 @@ def _execute(
         return
     for k, records in dask_map(run_batch, pending, scheduler):
         done(pending[k], records)
+
+
+@dataclass
+class _Ran:
+    """The records of a campaign's run and what it knows of them."""
+
+    frame: pd.DataFrame
+    run: int
+    due: int
+    missing: dict[str, int]
+
+
+def _run_batches(
+    batches: list[Batch],
+    folder: _Folder | None,
+    scheduler: str | Any | None,
+    progress: CampaignProgress | None,
+    note: CampaignNote,
+) -> _Ran:
+    """Run the batches not on disk yet (all without a folder; on resume, those that fail
+    their check and the claims that changed), then count the records against those due."""
+    work = [_Work(b) for b in batches] if folder is None else _plan_work(folder, batches, note)
+    pending = [w for w in work if not w.done]
+    by_stem = {w.batch.stem: w for w in pending}
+    kept: dict[str, list[Record]] = {}
+    count = [len(work) - len(pending)]
+
+    def finish(batch: Batch, records: list[Record]) -> None:
+        w = by_stem[batch.stem]
+        what = f"{len(records)} records"
+        if folder is not None:
+            frame = _frame(records)
+            if w.redo is not None and w.kept is not None:
+                frame, what = _merge(w.kept, frame, w.batch, w.redo), f"{what} redone"
+            folder.write(w.batch, frame)
+        else:
+            kept[batch.stem] = records
+        count[0] += 1
+        if progress is not None:
+            progress(count[0], len(batches), f"{batch.stem}: {what}")
+
+    tasks = [
+        w.batch if w.redo is None else replace(w.batch, claims=_only(w.batch.claims, w.redo))
+        for w in pending
+    ]
+    _execute(tasks, scheduler, finish)
+    due = sum(len(b.due()) for b in batches)
+    if folder is None:
+        records = [r for b in batches for r in kept.get(b.stem, [])]
+        frame = _frame(records)
+        return _Ran(frame, len(pending), due, _missing(batches, _present(frame)))
+    frames: dict[str, pd.DataFrame] = {}
+    for b in batches:  # every batch read back and checked against the manifest
+        got, why = folder.read(b)
+        if got is None:
+            note(f"{folder.file(b.stem).name} {why}")
+        else:
+            frames[b.stem] = got
+    present = set().union(*(_present(f) for f in frames.values()))
+    return _Ran(_concat(list(frames.values())), len(pending), due, _missing(batches, present))
+
+
+def _only(claims: tuple[Claim, ...], names: set[str]) -> tuple[Claim, ...]:
+    return tuple(c for c in claims if c.name in names)
+
+
+def _concat(frames: list[pd.DataFrame]) -> pd.DataFrame:
+    import pandas as pd
+
+    return pd.concat(frames, ignore_index=True) if frames else _frame([])
+
+
+def _missing(batches: list[Batch], present: set[tuple[int, str, str]]) -> dict[str, int]:
+    """Per batch, how many (instance, claim, solver) due have no record (only batches
+    that lack some)."""
+    out = {}
+    for b in batches:
+        lacking = len(b.due() - present)
+        if lacking:
+            out[b.stem] = lacking
+    return out
 
 
 # ---------------------------------------------------------------------- shrinking
@@ -655,20 +1167,23 @@ class _Target:
         )
 
 
-def _shrink_one(
-    row: dict[str, Any], target: _Target, folder: Path | None, max_seconds: float
-) -> Counterexample:
-    """Shrink the instance of one record (or read a shrink of an earlier run from disk)."""
+def _stem_of(row: dict[str, Any]) -> str:
     digest = hashlib.sha256(str(row["claim"]).encode()).hexdigest()[:6]  # the claim, short
     stem = "-".join(
         (row["family"], str(int(row["seed"])), _slug(row["check"])[:24], _slug(row["solver"]))
     )
-    stem = f"{stem}-{digest}"
-    head = {k: str(row[k]) for k in ("instance", "check", "claim", "solver", "verdict")}
-    if folder is not None and (folder / f"{stem}.json").exists():
-        from ..model.instances import load_instance
+    return f"{stem}-{digest}"
 
+
+def _load_counterexample(head: dict[str, str], folder: Path, stem: str) -> Counterexample | None:
+    """An earlier run's counterexample of this record from its files (None when they are
+    absent, unreadable or of another record)."""
+    from ..model.instances import load_instance
+
+    try:
         saved = json.loads((folder / f"{stem}.json").read_text())
+        if any(str(saved.get(k)) != v for k, v in head.items()):
+            return None
         inst = load_instance(str(folder / f"{stem}.toml"))
         return Counterexample(
             **head,
@@ -680,8 +1195,70 @@ def _shrink_one(
             partition=inst.partition(),
             path=folder / f"{stem}.toml",
         )
+    except Exception:  # LPBoundsError, OSError, JSON, a missing key: not a usable file
+        return None
+
+
+def _confirmed(cex: Counterexample, target: _Target) -> bool:
+    """The counterexample's model file, loaded back, holds the shrunk instance bit for bit
+    and still shows the record's verdict (the claim run on it again)."""
+    from ..model.instances import load_instance
+
+    assert cex.path is not None
+    try:
+        inst = load_instance(str(cex.path))
+        mdp, part = inst.mdp(), inst.partition()
+    except Exception:  # a file that does not load back shows nothing
+        return False
+    same = all(
+        np.array_equal(getattr(mdp, a), getattr(cex.mdp, a))
+        for a in ("successors", "probabilities", "allowed")
+    ) and np.array_equal(mdp.rewards[mdp.allowed], cex.mdp.rewards[cex.mdp.allowed])
+    same = same and mdp.discount == cex.mdp.discount
+    return bool(same and np.array_equal(part.labels, cex.partition.labels) and target(mdp, part))
+
+
+def _set_aside(folder: Path, stem: str) -> str:
+    """Move a counterexample's files into ``counterexamples/rejected/``; where to."""
+    where = folder / REJECTED_DIR
+    for suffix in (".toml", ".json"):
+        path = folder / f"{stem}{suffix}"
+        if path.exists():
+            where.mkdir(exist_ok=True)
+            target, k = where / path.name, 1
+            while target.exists():
+                k += 1
+                target = where / f"{stem}-{k}{suffix}"
+            os.replace(path, target)
+    return f"{folder.name}/{REJECTED_DIR}/"
+
+
+def _shrink_one(
+    row: dict[str, Any],
+    target: _Target,
+    folder: Path | None,
+    max_seconds: float,
+    note: CampaignNote,
+) -> Counterexample | None:
+    """Shrink the instance of one record, or take an earlier run's shrink from disk; None
+    when the record's verdict does not show on its instance when re-checked. A model
+    file is reported only once it is loaded back and shows the verdict again."""
+    stem = _stem_of(row)
+    head = {k: str(row[k]) for k in ("instance", "check", "claim", "solver", "verdict")}
+    what = f"{row['instance']}: {row['check']} ({row['solver']}) {row['verdict']}"
+    if folder is not None and (folder / f"{stem}.json").exists():
+        earlier = _load_counterexample(head, folder, stem)
+        if earlier is not None and _confirmed(earlier, target):
+            return earlier
+        where = _set_aside(folder, stem)
+        note(
+            f"the counterexample of {what} on disk does not show it: moved to {where}; shrunk again"
+        )
     start = campaign_instance(str(row["family"]), int(row["seed"]))
     found = shrink(start.mdp, start.partition, target, max_seconds=max_seconds)
+    if not found.shown:
+        note(f"{what}: not so when checked again on its instance: no counterexample written")
+        return None
     cex = Counterexample(
         **head,
         original=size_of(start.mdp, start.partition),
@@ -694,6 +1271,12 @@ def _shrink_one(
     )
     if cex.path is not None:
         _write_counterexample(cex, row)
+        if not _confirmed(cex, target):
+            where = _set_aside(folder, stem)  # type: ignore[arg-type]  # path set: a folder
+            note(
+                f"the counterexample of {what} does not show it when loaded back: moved to {where}"
+            )
+            return None
     return cex
 
 
@@ -730,6 +1313,7 @@ def _shrink_all(
     folder: Path | None,
     max_seconds: float,
     progress: CampaignProgress | None,
+    note: CampaignNote,
 ) -> list[Counterexample]:
     """One counterexample per (instance, check, claim, solver) record of ``verdicts``."""
     by_name = {c.name: c for c in claims}
@@ -757,10 +1341,13 @@ def _shrink_all(
             int(row["seed"]),
             run["exact_method"],
         )
-        out.append(_shrink_one(row, target, folder, max_seconds))
+        cex = _shrink_one(row, target, folder, max_seconds, note)
+        if cex is not None:
+            out.append(cex)
     return out
 
 
+# ---------------------------------------------------------------------- the campaign
 # ---------------------------------------------------------------------- the campaign
 @dataclass(repr=False)
 class CampaignResult:
@@ -777,9 +1364,20 @@ class CampaignResult:
     seconds : float
         Wall-clock time of this run (not of earlier runs it resumed).
     batches_run, batches_resumed : int
-        Batches computed by this run, and found on disk from an earlier one.
+        Batches computed by this run (wholly or the claims that changed), and kept from
+        an earlier one.
     scheduler : str
         How the batches ran (``"serial"``, a local scheduler's name, ``"cluster"``).
+    due : int
+        The (instance, claim, solver) that must each have a record or more
+        (:meth:`Batch.due`): instances x claims x solvers, and Remark 2 per solver.
+    missing : dict
+        Batch name -> how many of its (instance, claim, solver) due have no record on
+        disk (empty when every one has): such a campaign fails (:meth:`exit_status`).
+    notes : list of str
+        What this run found and did beyond computing (one line each): batches that failed
+        their check on resume (moved aside and recomputed), claims that changed,
+        counterexamples not reproduced.
     """
 
     frame: pd.DataFrame
@@ -790,13 +1388,17 @@ class CampaignResult:
     batches_run: int
     batches_resumed: int
     scheduler: str
+    due: int = 0
+    missing: dict[str, int] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
 
     def __repr__(self) -> str:
         counts = self.verdicts()
-        words = ", ".join(f"{counts[v.value]:,} {v.value}" for v in Verdict)
+        words = ", ".join(f"{counts[w]:,} {w}" for w in OUTCOMES)
+        lacking = sum(self.missing.values())
         return (
             f"CampaignResult({self.params['n']:,} instances, {len(self.frame):,} records: "
-            f"{words}; {len(self.counterexamples)} counterexamples)"
+            f"{words}; {lacking:,} due missing; {len(self.counterexamples)} counterexamples)"
         )
 
     def records(self) -> list[Record]:
@@ -804,9 +1406,10 @@ class CampaignResult:
         return list(self.frame.to_dict("records"))
 
     def verdicts(self) -> dict[str, int]:
-        """How many records have each verdict."""
+        """How many records have each outcome (:data:`~lpbounds.studies.verify.OUTCOMES`:
+        the three verdicts and "error")."""
         col = self.frame["verdict"]
-        return {v.value: int((col == v.value).sum()) for v in Verdict}
+        return {w: int((col == w).sum()) for w in OUTCOMES}
 
     def summary(self) -> pd.DataFrame:
         """One row per (claim, solver): verdict counts and the worst record
@@ -816,8 +1419,9 @@ class CampaignResult:
         return pd.DataFrame.from_records(summarize(self.records()))
 
     def exit_status(self, strict: bool = False) -> int:
-        """1 if a record is *violated* (with ``strict``, also *inconclusive*), else 0."""
-        return exit_status(self.records(), strict=strict)
+        """1 if a record is *violated* or an *error*, or records due are missing (with
+        ``strict``, also if one is *inconclusive*), else 0."""
+        return 1 if self.missing else exit_status(self.records(), strict=strict)
 
 
 def _check_params(
@@ -859,40 +1463,6 @@ def _batches(params: dict[str, Any], claims: Sequence[Claim]) -> list[Batch]:
     return out
 
 
-def _run_batches(
-    batches: list[Batch],
-    params: dict[str, Any],
-    folder: Path | None,
-    scheduler: str | Any | None,
-    progress: CampaignProgress | None,
-) -> tuple[pd.DataFrame, int]:
-    """Run the batches not on disk yet (all without a folder); the campaign's records and
-    how many batches ran."""
-    fmt = params["format"]
-    on_disk: set[str] = set()
-    if folder is not None:
-        _open_folder(folder, params)
-        on_disk = {p.stem for p in (folder / "batches").glob(f"*.{fmt}")}
-    pending = [b for b in batches if b.stem not in on_disk]
-    kept: dict[int, list[Record]] = {}
-    count = [len(batches) - len(pending)]
-
-    def finish(batch: Batch, records: list[Record]) -> None:
-        if folder is not None:
-            _write_frame(_frame(records), folder / "batches" / f"{batch.stem}.{fmt}")
-        else:
-            kept[batch.number] = records
-        count[0] += 1
-        if progress is not None:
-            progress(count[0], len(batches), f"{batch.stem}: {len(records)} records")
-
-    _execute(pending, scheduler, finish)
-    if folder is not None:
-        return read_records(folder), len(pending)
-    order = sorted(kept, key=lambda b: (b < 0, b))
-    return _frame([r for b in order for r in kept[b]]), len(pending)
-
-
 def run_campaign(
     n: int,
     seed: int = 0,
@@ -911,6 +1481,8 @@ def run_campaign(
     shrink_inconclusive: bool = False,
     shrink_seconds: float = 60.0,
     progress: CampaignProgress | None = None,
+    notify: CampaignNote | None = None,
+    rerun_changed: bool = False,
     command_line: Sequence[str] | None = None,
 ) -> CampaignResult:
     """Check ``claims`` on ``n`` seeded instances with every solver (a campaign).
@@ -934,8 +1506,9 @@ def run_campaign(
         As for :func:`~lpbounds.studies.verify.verify_instance` (``exact_method``: policy
         iteration by default, fast on small models at every discount).
     out : str or Path, optional
-        The campaign's folder: batches are written there as they finish, and a rerun with
-        the same arguments resumes (see the module docstring). None: in memory only.
+        The campaign's folder: batches are written there as they finish, each with its
+        manifest entry, and a rerun with the same arguments resumes, checking every batch
+        on disk first (see the module docstring). None: in memory only.
     fmt : {"csv", "parquet"}
         The batch files' format (Parquet needs pyarrow).
     batch_size : int
@@ -943,13 +1516,24 @@ def run_campaign(
     scheduler : str or dask.distributed.Client, optional
         None: serially, here; ``"synchronous"``, ``"threads"``, ``"processes"``: Dask's
         local schedulers; a scheduler's address (``"tcp://127.0.0.1:8786"``) or a
-        client: a Dask cluster (conjectures are pickled to its workers).
+        client: a Dask cluster (conjectures are pickled to its workers). Checked, and an
+        address connected to, before anything is written
+        (:func:`~lpbounds.studies.compare.check_scheduler`).
     shrink, shrink_inconclusive : bool
         Shrink the instance of every *violated* record (and of every *inconclusive* one).
     shrink_seconds : float
         Time budget of each shrink.
     progress : callable(done, total, note), optional
         Called after each batch (and before each shrink).
+    notify : callable(str), optional
+        Called with each note of the run as it happens (one line: a batch that failed its
+        check and is recomputed, a counterexample not reproduced); all are also in the
+        result's ``notes`` and ``metadata.json``.
+    rerun_changed : bool
+        Resume a campaign whose claims (a conjecture's source, description or
+        ``uses_solver``) or lpbounds version changed since its records were made,
+        recomputing the records of what changed; False (default): such a folder is
+        refused, naming what changed.
     command_line : sequence of str, optional
         Recorded in ``metadata.json`` (default ``sys.argv``).
 
@@ -960,17 +1544,24 @@ def run_campaign(
     Raises
     ------
     ValidationError
-        Before any work: a bad number, an unknown family, claim or solver, or an ``out``
-        folder that holds a campaign with other arguments.
+        Before any work: a bad number, an unknown family, claim or solver, a bad
+        ``scheduler`` or an address where none answers, an ``out`` folder that holds a
+        campaign with other arguments or whose claims changed (without
+        ``rerun_changed``).
     OutputError
-        ``out`` is a file, or a folder that holds something other than a campaign.
+        Before any work: ``out`` is a file, a folder that holds something other than a
+        campaign, a campaign whose ``campaign.json`` or ``manifest.json`` cannot be read,
+        or one written before campaigns kept a manifest (nothing is changed in it).
     """
+    from .compare import DASK_LOCAL, check_scheduler, connect_scheduler
+
     t0 = time.perf_counter()
     chosen = _check_params(n, seed, families, batch_size, n_costs, rtol)
     check_exact_method(exact_method)
     _check_parquet(fmt)
     claim_list = resolve_claims(claims)
     names = [resolve_solver(s) for s in (default_solvers() if solvers is None else solvers)]
+    scheduler = check_scheduler(scheduler)
     params: dict[str, Any] = {
         "n": int(n),
         "seed": int(seed),
@@ -983,31 +1574,53 @@ def run_campaign(
         "batch_size": int(batch_size),
         "format": fmt,
     }
+    fps = {c.name: claim_fingerprint(c) for c in claim_list}
     batches = _batches(params, claim_list)
-    folder = None if out is None else Path(out)
-    frame, n_run = _run_batches(batches, params, folder, scheduler, progress)
+    notes: list[str] = []
+
+    def note(line: str) -> None:
+        notes.append(line)
+        if notify is not None:
+            notify(line)
+
+    client = None
+    if isinstance(scheduler, str) and scheduler not in DASK_LOCAL:
+        client = scheduler = connect_scheduler(scheduler)  # before anything is written
+    try:
+        folder = None
+        if out is not None:
+            folder, changed = _open_folder(Path(out), params, fps, rerun_changed)
+            for line in changed:
+                note(line)
+        ran = _run_batches(batches, folder, scheduler, progress, note)
+    finally:
+        if client is not None:
+            client.close()
     verdicts = ["violated", "inconclusive"] if shrink_inconclusive else ["violated"]
     cexs: list[Counterexample] = []
     if shrink:
-        where = None if folder is None else folder / "counterexamples"
-        cexs = _shrink_all(frame, claim_list, verdicts, params, where, shrink_seconds, progress)
+        where = None if folder is None else folder.path / "counterexamples"
+        cexs = _shrink_all(
+            ran.frame, claim_list, verdicts, params, where, shrink_seconds, progress, note
+        )
     how = "serial"
     if scheduler is not None:
-        from .compare import DASK_LOCAL
-
         how = str(scheduler) if scheduler in DASK_LOCAL else "cluster"
     result = CampaignResult(
-        frame,
+        ran.frame,
         params,
         cexs,
-        folder,
+        None if folder is None else folder.path,
         time.perf_counter() - t0,
-        n_run,
-        len(batches) - n_run,
+        ran.run,
+        len(batches) - ran.run,
         how,
+        ran.due,
+        ran.missing,
+        notes,
     )
     if folder is not None:
-        _save(result, folder, command_line)
+        _save(result, folder.path, command_line)
     return result
 
 
@@ -1032,8 +1645,11 @@ def campaign_metadata(
         "seconds": result.seconds,
         "batches": {"run": result.batches_run, "resumed": result.batches_resumed},
         "records": len(result.frame),
+        "due": result.due,
+        "missing": dict(result.missing),
         "verdicts": result.verdicts(),
         "counterexamples": [c.row() for c in result.counterexamples],
+        "notes": list(result.notes),
     }
 
 

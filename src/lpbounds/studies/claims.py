@@ -24,8 +24,18 @@ A conjecture's predicate returns one of
   is not certain;
 * any of these paired with a string, ``(verdict, "why")``, which becomes ``detail``.
 
-A predicate that raises gives an *inconclusive* record whose ``error`` says what was
-raised (a crash is a finding of the campaign, and the other instances still run).
+A predicate is sandboxed from the run, not trusted with it: one that raises, calls
+``sys.exit`` (``SystemExit``) or returns anything else (``None``, another string, an
+array) gives an *error* record (:data:`~lpbounds.studies.verify.ERROR`) whose ``error``
+says what happened; the other trials and instances still run, and the run's exit status
+says so. Only ``KeyboardInterrupt`` goes through: Ctrl-C still stops the run. (A predicate
+that ends the process itself, ``os._exit`` or a crash in C code, cannot be caught in the
+process.)
+
+Every claim has a **fingerprint** (:func:`claim_fingerprint`): a conjecture's is the
+SHA-256 of its predicate's source file (or of its compiled code when it has no file), with
+its description and ``uses_solver``. A campaign records them, so that records are never
+reported as those of a predicate that has changed since (:mod:`lpbounds.studies.campaign`).
 
 Conjectures are pickled to run on Dask workers: write them as module-level functions
 (or lambdas, which Dask's cloudpickle carries by value).
@@ -57,6 +67,7 @@ from .verify import (
     Record,
     Tally,
     VerifyInstance,
+    error_record,
     exact_interval,
     make_record,
     try_solve,
@@ -74,6 +85,7 @@ __all__ = [
     "Solved",
     "SplitClaims",
     "Trial",
+    "claim_fingerprint",
     "claim_names",
     "load_claim",
     "resolve_claims",
@@ -302,6 +314,61 @@ def claim_names(claims: Iterable[Claim]) -> list[str]:
     return [c.name for c in claims]
 
 
+def _predicate_source(predicate: Any) -> tuple[str, bytes]:
+    """Where a predicate's code is and its bytes: its source file (the whole file: the
+    predicate may call helpers defined beside it), else its compiled code."""
+    import functools
+    import inspect
+    import marshal
+
+    target = predicate.func if isinstance(predicate, functools.partial) else predicate
+    target = inspect.unwrap(target)
+    holder = target if inspect.isfunction(target) or inspect.ismethod(target) else type(target)
+    try:
+        path = inspect.getsourcefile(holder)
+    except TypeError:  # a builtin or a C function: no source
+        path = None
+    if path:
+        try:
+            with open(path, "rb") as fh:
+                return path, fh.read()
+        except OSError:
+            pass
+    call = type(target).__call__ if callable(target) else None
+    code = getattr(target, "__code__", None) or getattr(call, "__code__", None)
+    if code is not None:
+        return f"<compiled code of {getattr(target, '__qualname__', type(target).__name__)}>", (
+            marshal.dumps(code)
+        )
+    return f"<{type(target).__name__} object: no source>", repr(target).encode()
+
+
+def claim_fingerprint(claim: Claim) -> dict[str, Any]:
+    """What a claim's records depend on besides lpbounds itself (whose version a campaign
+    records apart).
+
+    Returns
+    -------
+    dict
+        A built-in claim: ``{"kind": "built in"}``. A conjecture: ``{"kind":
+        "conjecture", "source": its file, "sha256": that file's SHA-256, "description":
+        ..., "uses_solver": ...}`` (``source`` names the compiled code when the predicate
+        has no source file). Two fingerprints are equal when the records would be.
+    """
+    import hashlib
+
+    if isinstance(claim, BuiltinClaim):
+        return {"kind": "built in"}
+    where, data = _predicate_source(claim.predicate)
+    return {
+        "kind": "conjecture",
+        "source": where,
+        "sha256": hashlib.sha256(data).hexdigest(),
+        "description": claim.description,
+        "uses_solver": bool(claim.uses_solver),
+    }
+
+
 def load_claim(spec: str) -> Claim:
     """A claim named on a command line: a built-in claim's name, or ``FILE.py:NAME`` /
     ``package.module:NAME`` naming a :class:`Conjecture` or a predicate in a file or an
@@ -427,11 +494,12 @@ def split_claims(claims: Iterable[Claim]) -> SplitClaims:
 
 
 def _verdict_of(outcome: Any, name: str, accuracy: float) -> tuple[Comparison, str]:
-    """A predicate's outcome as a Comparison and a detail string."""
+    """A predicate's outcome as a Comparison and a detail string (ValidationError: not a
+    verdict)."""
     detail = ""
     if isinstance(outcome, tuple) and len(outcome) == 2 and isinstance(outcome[1], str):
         outcome, detail = outcome
-    if isinstance(outcome, Comparison):
+    if isinstance(outcome, Comparison) and isinstance(outcome.verdict, Verdict):
         return outcome, detail
     if isinstance(outcome, bool | np.bool_):
         verdict = Verdict.HOLDS if bool(outcome) else Verdict.VIOLATED
@@ -440,33 +508,34 @@ def _verdict_of(outcome: Any, name: str, accuracy: float) -> tuple[Comparison, s
     elif isinstance(outcome, str) and outcome in {v.value for v in Verdict}:
         verdict = Verdict(outcome)
     else:
+        shown = repr(outcome)
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
         raise ValidationError(
-            f"conjecture {name!r} returned {outcome!r}; return a Comparison (Trial.equal, "
-            "Trial.at_least), a Verdict, 'holds'/'violated'/'inconclusive' or a bool"
+            f"conjecture {name!r} returned {shown}, not a verdict: return a Comparison "
+            "(Trial.equal, Trial.at_least), a Verdict, 'holds'/'violated'/'inconclusive' or "
+            "a bool"
         )
     nan = float("nan")
     return Comparison(verdict, nan, nan, accuracy, 0, (nan, nan), (nan, nan)), detail
 
 
 def _conjecture_record(conj: Conjecture, trial: Trial) -> Record:
-    """Call the predicate on one trial; its record (an exception: *inconclusive*, ``error``)."""
-    error = ""
+    """Call the predicate on one trial, sandboxed: its record, or an *error* record when
+    it raised, called ``sys.exit`` or returned no verdict (KeyboardInterrupt goes through)."""
+    head = (conj.name, conj.description or conj.name, trial.instance.name, trial.solver or "exact")
     try:
         outcome = conj.predicate(trial)
+    except SystemExit as exc:  # sys.exit in a predicate ends the trial, not the run
+        error = f"SystemExit: the predicate called sys.exit({exc.code!r})"
+        return error_record(*head, error, "the predicate called sys.exit", trial.tally)
     except Exception as exc:  # a crash of the predicate (or of what it calls) is a finding
         error = f"{type(exc).__name__}: {exc}"
-        outcome = (Verdict.INCONCLUSIVE, f"the predicate raised {error}")
-    cmp, detail = _verdict_of(outcome, conj.name, trial.accuracy)
-    record = make_record(
-        conj.name,
-        conj.description or conj.name,
-        trial.instance.name,
-        trial.solver or "exact",
-        cmp,
-        detail,
-        trial.tally,
-    )
-    return {**record, "error": error}
+        return error_record(*head, error, "the predicate raised an exception", trial.tally)
+    try:
+        cmp, detail = _verdict_of(outcome, conj.name, trial.accuracy)
+    except ValidationError as exc:
+        return error_record(*head, str(exc), "the predicate returned no verdict", trial.tally)
+    return {**make_record(*head, cmp, detail, trial.tally), "error": ""}
 
 
 def run_claims(

@@ -52,10 +52,12 @@ solves run on the same cores are noisy: use ``jobs=1`` for timings you want to q
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 import math
 import multiprocessing
 import os
+import re
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -79,7 +81,7 @@ from ..formulations.solvers import (
 )
 from ..status import POINT_STATUSES, Status
 from ..text import fmt_list, fmt_seconds
-from ..tolerances import LP_CERT_RTOL, LP_COMPARE_RTOL, dp_scale
+from ..tolerances import LP_CERT_RTOL, LP_COMPARE_RTOL, SCHEDULER_CONNECT_SECONDS, dp_scale
 from .report import (
     DEFAULT_SHIFTS,
     plot_study,
@@ -103,6 +105,8 @@ __all__ = [
     "StudyResult",
     "Task",
     "available_formulations",
+    "check_scheduler",
+    "connect_scheduler",
     "dask_map",
     "highs_algorithms",
     "missing_solvers",
@@ -836,11 +840,13 @@ def run_study(
     ValidationError
         Before any solve: a missing instance file, an unknown solver or option set, no
         solver or formulation left to run, a bad ``repeat``, ``accuracy`` or
-        ``time_limit``.
+        ``time_limit``, a ``scheduler`` that is none of the accepted ones or an address
+        where no scheduler answers (:func:`check_scheduler`).
     """
     import pandas as pd
 
     t0 = time.perf_counter()
+    scheduler = check_scheduler(scheduler)
     tasks, notes = _prepare_tasks(instances, formulations, solvers, repeat, accuracy, time_limit)
     records = _execute(tasks, jobs, scheduler, progress)
     frame = pd.DataFrame.from_records(records, columns=list(COLUMNS))
@@ -1011,6 +1017,116 @@ def _run_dask(
 
 #: Dask's local schedulers, usable without a cluster (``scheduler="threads"``).
 DASK_LOCAL = ("synchronous", "threads", "processes")
+
+#: The address schemes of a Dask scheduler given as text: over TCP (checked by opening a
+#: connection), UCX (parsed only), and ``inproc://`` (a cluster in this process).
+DASK_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx", "inproc")
+
+_ADDRESS = re.compile(
+    r"(?:(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+)"
+    r":(?P<port>[0-9]{1,5})"
+)
+
+
+def _address(scheduler: str) -> tuple[str, int]:
+    """``(host, port)`` of a scheduler's address, ``host:port`` or ``scheme://host:port``."""
+    m = _ADDRESS.fullmatch(scheduler.strip())
+    if m is None:
+        raise ValidationError(
+            f"scheduler {scheduler!r} is neither one of Dask's local schedulers "
+            f"({', '.join(DASK_LOCAL)}) nor a Dask scheduler's address with its port "
+            "(host:port or tcp://host:port)"
+        )
+    scheme, port = m["scheme"], int(m["port"])
+    if scheme is not None and scheme.lower() not in DASK_SCHEMES:
+        raise ValidationError(
+            f"scheduler {scheduler!r}: unknown scheme {scheme!r} (known: "
+            f"{', '.join(DASK_SCHEMES)}); for another transport pass a dask.distributed "
+            "Client"
+        )
+    if not 0 < port < 65536:
+        raise ValidationError(f"scheduler {scheduler!r}: port {port} is not in 1..65535")
+    return m["host"].strip("[]"), port
+
+
+def check_scheduler(scheduler: str | Any | None) -> str | Any | None:
+    """``scheduler`` checked before any work or output: None, one of :data:`DASK_LOCAL`
+    (dask installed), a ``dask.distributed`` client, or the address of a Dask scheduler
+    that answers (``host:port`` or ``scheme://host:port``, schemes :data:`DASK_SCHEMES`;
+    a TCP connection is opened and closed, waiting at most
+    :data:`~lpbounds.tolerances.SCHEDULER_CONNECT_SECONDS`).
+
+    Returns
+    -------
+    str or Client or None
+        ``scheduler`` itself (an address stripped of surrounding blanks).
+
+    Raises
+    ------
+    ValidationError
+        Anything else (naming it and what is accepted), or an address where nothing
+        answers.
+    SolverNotInstalledError
+        dask (a local scheduler) or dask.distributed (an address) is not installed.
+    """
+    if scheduler is None:
+        return None
+    if not isinstance(scheduler, str):
+        if all(callable(getattr(scheduler, m, None)) for m in ("submit", "map")):
+            return scheduler
+        raise ValidationError(
+            f"scheduler must be a name, an address or a dask.distributed Client; got "
+            f"{type(scheduler).__name__}"
+        )
+    if scheduler in DASK_LOCAL:
+        if importlib.util.find_spec("dask") is None:
+            raise SolverNotInstalledError(
+                f"scheduler {scheduler!r} needs dask: pip install 'lpbounds[study]'"
+            )
+        return scheduler
+    if importlib.util.find_spec("distributed") is None:
+        raise SolverNotInstalledError(
+            f"scheduler {scheduler!r} needs dask.distributed: pip install 'lpbounds[study]'"
+        )
+    if scheduler.strip().startswith("inproc://"):  # a cluster of this process
+        return scheduler.strip()
+    host, port = _address(scheduler)
+    if scheduler.strip().lower().startswith("ucx://"):  # not TCP: parsed, not probed
+        return scheduler.strip()
+    import socket
+
+    try:
+        with socket.create_connection((host, port), timeout=SCHEDULER_CONNECT_SECONDS):
+            pass
+    except OSError as exc:
+        why = exc.strerror or type(exc).__name__
+        raise ValidationError(
+            f"scheduler {scheduler!r}: no Dask scheduler answers at {host}:{port} ({why}); "
+            f"start one there (dask scheduler --port {port}) or give one of "
+            f"{', '.join(DASK_LOCAL)}"
+        ) from None
+    return scheduler.strip()
+
+
+def connect_scheduler(address: str) -> Any:
+    """A ``dask.distributed`` client of the scheduler at ``address`` (checked by
+    :func:`check_scheduler`), connected within
+    :data:`~lpbounds.tolerances.SCHEDULER_CONNECT_SECONDS`; the caller closes it.
+
+    Raises
+    ------
+    ValidationError
+        The address answers but no Dask scheduler does (another service, a timeout).
+    """
+    from dask.distributed import Client
+
+    try:
+        return Client(address, timeout=SCHEDULER_CONNECT_SECONDS)
+    except (OSError, TimeoutError) as exc:
+        raise ValidationError(
+            f"scheduler {address!r}: the address answers, but no Dask scheduler does "
+            f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
+        ) from None
 
 
 def _execute(

@@ -22,7 +22,8 @@ Every step lowers ``(states, blocks, actions, outcomes, allowed pairs, digits, m
 in lexicographic order (``digits``: the significant decimal digits of the rewards,
 probabilities and discount; ``magnitude``: ``|log10 max|R||``), so the descent ends; it
 also ends after ``max_evaluations`` tests. The result is the last instance that passed,
-never one that did not.
+never one that did not: the start itself is tested first, and when it does not pass there
+is nothing to shrink (``Shrunk.shown`` is False: a caller writes no counterexample then).
 
 :func:`model_toml` writes an instance as an instance file of ``kind = "explicit"`` (the
 arrays in full, with a ``[partition] kind = "labels"``) that ``lpbounds solve`` and
@@ -62,15 +63,19 @@ class Shrunk:
     mdp, partition
         The smallest instance found (the input itself when no step was kept).
     evaluations : int
-        How many candidates were tested.
+        How many candidates were tested (the start's own test not counted).
     steps : int
         How many of them were kept.
+    shown : bool
+        Whether the start passed ``keep``: when it did not, nothing was shrunk (the start
+        is returned, ``evaluations`` and ``steps`` are 0) and it shows nothing.
     """
 
     mdp: FiniteMDP
     partition: Partition
     evaluations: int
     steps: int
+    shown: bool = True
 
 
 def size_of(mdp: FiniteMDP, partition: Partition) -> dict[str, int]:
@@ -296,7 +301,9 @@ def shrink(
     Parameters
     ----------
     mdp, partition
-        The instance to shrink (``keep(mdp, partition)`` is assumed True: it is not tested).
+        The instance to shrink. ``keep(mdp, partition)`` is tested first: a record read
+        from disk may say more than the instance shows (edited, or of a solver that
+        answers differently now), and a counterexample must show what it claims.
     keep : callable(FiniteMDP, Partition) -> bool
         True when a candidate still shows what is kept (e.g. a claim still *violated*).
     max_evaluations : int
@@ -307,11 +314,14 @@ def shrink(
     Returns
     -------
     Shrunk
+        With ``shown`` False when the start does not pass ``keep``.
     """
     if partition.n_states != mdp.n_states:
         raise ValidationError(
             f"partition has {partition.n_states} states; the MDP has {mdp.n_states}"
         )
+    if not keep(mdp, partition):
+        return Shrunk(mdp, partition, 0, 0, shown=False)
     deadline = None if max_seconds is None else time.monotonic() + float(max_seconds)
     current: Pair = (mdp, partition)
     evaluations = steps = 0

@@ -26,6 +26,13 @@ Each record has a :class:`~lpbounds.status.Verdict`:
 A solver's inaccuracy therefore never reads as a broken theorem: an inaccurate point has
 a wide (still valid) bracket, which gives *inconclusive*, not *violated*.
 
+A record whose claim gave no verdict at all has the outcome ``error`` (:data:`ERROR`, not a
+:class:`~lpbounds.status.Verdict`): a conjecture's predicate that raised, called
+``sys.exit`` or returned something other than a verdict (:mod:`lpbounds.studies.claims`),
+or a campaign's instance that could not be built or checked. Its ``error`` says why. It is
+counted apart from the three verdicts (:func:`summarize`) and fails the run
+(:func:`exit_status`): evidence that could not be produced is not evidence either way.
+
 Record keys: ``check`` (the paper's result), ``claim`` (what was compared), ``instance``,
 ``solver`` ("exact" for solver-free checks, "all" across solvers), ``verdict``, ``width``,
 ``deviation`` (distance of the interval midpoints), ``accuracy``, ``index``,
@@ -111,8 +118,10 @@ from ..status import Verdict
 from ..tolerances import LP_COMPARE_RTOL, dp_scale
 
 __all__ = [
+    "ERROR",
     "EXACT_METHODS",
     "INSTANCE_CHECKS",
+    "OUTCOMES",
     "RECORD_COLUMNS",
     "RELIABLE_LP_SOLVERS",
     "Tally",
@@ -121,6 +130,8 @@ __all__ = [
     "alp_value_bracket",
     "check_exact_method",
     "default_solvers",
+    "due_solvers",
+    "error_record",
     "estimated_states",
     "exact_interval",
     "exit_status",
@@ -128,6 +139,7 @@ __all__ = [
     "lemma2_slack",
     "make_record",
     "model_instances",
+    "outcome_of",
     "random_instances",
     "records_frame",
     "run_verification",
@@ -167,6 +179,23 @@ IB_BLOCKS: tuple[int, ...] = (1, 2, 3, 4, 5)
 #: The checks :func:`verify_instance` makes, in its order (Remark 2 is an existence claim,
 #: checked once per run by :func:`verify_remark2`).
 INSTANCE_CHECKS: tuple[str, ...] = ("Lemma 1", "Theorem 1", "Lemma 2", "Theorem 2")
+
+#: The outcome of a record whose claim gave no verdict (see the module docstring).
+ERROR = "error"
+
+#: Every outcome a record can have, from best to worst: the verdicts, then :data:`ERROR`.
+OUTCOMES: tuple[str, ...] = ("holds", "inconclusive", "violated", ERROR)
+
+#: The checks whose records include one of solver "exact" (solver-free) on every instance.
+_EXACT_CHECKS = ("Lemma 1", "Theorem 1", "Theorem 2")
+
+
+def due_solvers(check: str, solvers: Sequence[str]) -> list[str]:
+    """The solvers a built-in check gives records for on every instance: each of
+    ``solvers`` (one record or more each), and "exact" for the checks with a solver-free
+    record (Lemma 1, Theorem 1, Theorem 2; Remark 2: ``solvers`` only). The "all" record
+    of Theorem 1 needs two solvers with a point, so it is never due."""
+    return [*solvers, *(["exact"] if check in _EXACT_CHECKS else [])]
 
 
 def default_solvers() -> list[str]:
@@ -340,6 +369,18 @@ def make_record(
         "detail": detail,
         **(tally or Tally()).fields(),
     }
+
+
+def error_record(
+    check: str, claim: str, instance: str, solver: str, error: str, detail: str = "",
+    tally: Tally | None = None,
+) -> Record:  # fmt: skip
+    """The record of a claim that gave no verdict: outcome :data:`ERROR`, no interval,
+    ``error`` saying why (``tally``: the solves made before it failed)."""
+    nan = float("nan")
+    cmp = Comparison(Verdict.INCONCLUSIVE, nan, nan, nan, 0, (nan, nan), (nan, nan))
+    record = make_record(check, claim, instance, solver, cmp, detail, tally)
+    return {**record, "verdict": ERROR, "error": error}
 
 
 def _no_point(accuracy: float) -> Comparison:
@@ -640,6 +681,16 @@ def _lemma2_checks(
     ]
 
 
+def _lemma2_without_duals(name: str, solver: str, acc: float, tally: Tally) -> list[Record]:
+    """Lemma 2's records when the first RLP solve returned no point (no duals to build
+    ``SLP(mu-bar)`` from): *inconclusive*, so that the claim still has its records."""
+    why = "no RLP point, so no duals mu-bar to build SLP(mu-bar) from"
+    return [
+        make_record("Lemma 2", "SLP(mu-bar) = v*", name, solver, _no_point(acc), why, tally),
+        make_record("Lemma 2", "reduced MDP value = v*", name, solver, _no_point(acc), why),
+    ]
+
+
 def lemma2_slack(rlp: Any, result: LPResult, v_lo: np.ndarray, v_hi: np.ndarray) -> float:
     r"""Certified upper bound on ``sigma = max_i min_u`` (slack at ``v*`` of ``SLP(mu-bar)``'s
     row ``(i, u)``) for the pair duals ``mu-bar = result.mu`` of an RLP solve.
@@ -826,6 +877,8 @@ def _solver_checks(
             first_rlp = (rlps[0][0], first)
             if "Lemma 2" in checks:
                 records += _lemma2_checks(inst, refs, solver, rlps[0][0], first)
+        elif "Lemma 2" in checks:
+            records += _lemma2_without_duals(inst.name, solver, acc, tally)
     if "Theorem 2" in checks:
         records += _theorem2_checks(inst, refs, solver)
     return records, first_rlp
@@ -1192,23 +1245,28 @@ class VerifyResult(NamedTuple):
 
 
 _CHECK_ORDER = [*INSTANCE_CHECKS, "Remark 2"]
-#: Verdicts from best to worst (the order of the summary's counts)
-_VERDICTS = (Verdict.HOLDS, Verdict.INCONCLUSIVE, Verdict.VIOLATED)
-_VERDICT_RANK = {v: k for k, v in enumerate(_VERDICTS)}
+_OUTCOME_RANK = {v: k for k, v in enumerate(OUTCOMES)}
+
+
+def outcome_of(record: Record) -> str:
+    """A record's outcome as a word of :data:`OUTCOMES` (its verdict's, or "error")."""
+    v = record["verdict"]
+    return str(v.value if isinstance(v, Verdict) else v)
 
 
 def _badness(r: Record) -> tuple[int, float]:
     acc = r["accuracy"]
     ratio = r["width"] / acc if acc and np.isfinite(acc) else float(r["width"])
-    return _VERDICT_RANK[Verdict(r["verdict"])], ratio if np.isfinite(ratio) else float("inf")
+    return _OUTCOME_RANK[outcome_of(r)], ratio if np.isfinite(ratio) else float("inf")
 
 
 def summarize(records: Sequence[Record]) -> list[Record]:
-    """One row per (check, solver): the verdict counts and the worst record.
+    """One row per (check, solver): the counts of each outcome and the worst record.
 
     Each row has ``check``, ``solver``, ``records``, ``holds``, ``inconclusive``,
-    ``violated``, and ``verdict``, ``width``, ``accuracy`` of the worst record (worst
-    verdict, then the largest ``width / accuracy``).
+    ``violated``, ``error`` (records without a verdict), and ``verdict``, ``width``,
+    ``accuracy`` of the worst record (worst outcome, an error worst of all, then the
+    largest ``width / accuracy``).
     """
     groups: dict[tuple[str, str], list[Record]] = {}
     for r in records:
@@ -1223,17 +1281,18 @@ def summarize(records: Sequence[Record]) -> list[Record]:
     ):
         worst = max(recs, key=_badness)
         row: Record = {"check": check, "solver": solver, "records": len(recs)}
-        for v in _VERDICTS:
-            row[v.value] = sum(Verdict(r["verdict"]) is v for r in recs)
+        for word in OUTCOMES:
+            row[word] = sum(outcome_of(r) == word for r in recs)
         row.update(verdict=worst["verdict"], width=worst["width"], accuracy=worst["accuracy"])
         out.append(row)
     return out
 
 
 def exit_status(records: Sequence[Record], *, strict: bool = False) -> int:
-    """1 if a record is *violated* (or, with ``strict``, *inconclusive*), else 0."""
-    bad = {Verdict.VIOLATED, Verdict.INCONCLUSIVE} if strict else {Verdict.VIOLATED}
-    return 1 if any(Verdict(r["verdict"]) in bad for r in records) else 0
+    """1 if a record is *violated* or an *error* (with ``strict``, also *inconclusive*),
+    else 0."""
+    bad = {"violated", ERROR, *(["inconclusive"] if strict else [])}
+    return 1 if any(outcome_of(r) in bad for r in records) else 0
 
 
 def write_json(records: list[Record], path: str | Path) -> None:
