@@ -16,9 +16,11 @@
 # $\mu_u^i(x) \ge 0$:
 #
 # $$
-# SLP(\mu) := \min \bar c^T v \quad \text{s.t.} \quad
-# \sum_{x \in S_i} \mu_u^i(x)\, v(i) \ge \sum_{x \in S_i} \mu_u^i(x)
+# \begin{array}{l}
+# SLP(\mu) := \min \bar c^T v \quad \text{s.t.} \\
+# \qquad \sum_{x \in S_i} \mu_u^i(x)\, v(i) \ge \sum_{x \in S_i} \mu_u^i(x)
 # \Big[R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))\Big] \quad \forall u,\ i .
+# \end{array}
 # $$
 #
 # For an arbitrary $\mu$ it is a relaxation of RLP, $SLP(\mu) \le RLP$, and *not* a bound

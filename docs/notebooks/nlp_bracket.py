@@ -15,9 +15,12 @@
 # *minimum* over each partition instead of the maximum: the disjunctive program (eq. 23-25)
 #
 # $$
-# NLP := \min \bar c^T w \quad \text{s.t.} \quad
-# w(i) \ge \min_{x \in S_i} \Big\{ R_u(x) + \lambda \sum_{l=0}^m p_l\, w(\bar f(x,u,Y_l)) \Big\}
+# \begin{array}{l}
+# NLP := \min \bar c^T w \quad \text{s.t.} \\
+# \qquad w(i) \ge \min_{x \in S_i}
+# \Big\{ R_u(x) + \lambda \sum_{l=0}^m p_l\, w(\bar f(x,u,Y_l)) \Big\}
 # \quad \forall u,\ i = 1, \dots, M .
+# \end{array}
 # $$
 #
 # Each constraint is a disjunction (one of the states of $S_i$ must satisfy it), so the

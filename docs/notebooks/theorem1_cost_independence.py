@@ -25,9 +25,11 @@
 # $\bar c(i) = \sum_{x \in S_i} c(x)$, the restricted LP (eq. 9) is
 #
 # $$
-# RLP := \min \sum_{i=1}^M \bar c(i)\, v(i) \quad \text{s.t.} \quad
-# v(i) \ge R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))
+# \begin{array}{l}
+# RLP := \min \sum_{i=1}^M \bar c(i)\, v(i) \quad \text{s.t.} \\
+# \qquad v(i) \ge R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))
 # \quad \forall x \in S_i,\ \forall u .
+# \end{array}
 # $$
 #
 # **Theorem 1.** The optimal $v^*$ is the same for every cost $c \ge 0$ (and the only

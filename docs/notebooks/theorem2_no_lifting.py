@@ -19,9 +19,11 @@
 # partition values, each constrained by the Bellman rows of the previous one, cyclically,
 #
 # $$
-# IB := \min \sum_{j=1}^L \bar c^T v_j \quad \text{s.t.} \quad
-# v_{j+1}(i) \ge R_u(x) + \lambda \sum_l p_l\, v_j(\bar f(x,u,Y_l)) \ (j < L), \quad
-# v_1(i) \ge R_u(x) + \lambda \sum_l p_l\, v_L(\bar f(x,u,Y_l)),
+# \begin{array}{l}
+# IB := \min \sum_{j=1}^L \bar c^T v_j \quad \text{s.t.} \\
+# \qquad v_{j+1}(i) \ge R_u(x) + \lambda \sum_l p_l\, v_j(\bar f(x,u,Y_l)) \ (j < L), \\
+# \qquad v_1(i) \ge R_u(x) + \lambda \sum_l p_l\, v_L(\bar f(x,u,Y_l)),
+# \end{array}
 # $$
 #
 # for every $x \in S_i$, $i$ and $u$. For $L = 1$ this is RLP.
@@ -34,8 +36,10 @@
 # the surplus of its Bellman inequality, and price it with $d \ge 0$:
 #
 # $$
-# LLP := \min \bar c^T v + d^T z \quad \text{s.t.} \quad
-# z_u(x) = v(i) - R_u(x) - \lambda \sum_l p_l\, v(\bar f(x,u,Y_l)),\quad z \ge 0 .
+# \begin{array}{l}
+# LLP := \min \bar c^T v + d^T z \quad \text{s.t.} \\
+# \qquad z_u(x) = v(i) - R_u(x) - \lambda \sum_l p_l\, v(\bar f(x,u,Y_l)),\quad z \ge 0 .
+# \end{array}
 # $$
 #
 # The projection of its feasible set onto $v$ is RLP's, so its optimal $v$ is never
