@@ -46,6 +46,13 @@ SIZED_BRACES = (
 )
 
 
+#: an executed notebook a user left in docs/notebooks/ (valid nbformat, with a marker)
+STRAY_IPYNB = (
+    '{"cells": [{"cell_type": "markdown", "metadata": {}, "source": ["left by a user"]}], '
+    '"metadata": {}, "nbformat": 4, "nbformat_minor": 5}'
+)
+
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The site built from this tree (skipped without the docs extra)."""
@@ -57,6 +64,9 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(ROOT / "mkdocs.yml", src / "mkdocs.yml")
     (src / "src").symlink_to(ROOT / "src")
     (src / "examples").symlink_to(ROOT / "examples")
+    # what the README's `jupytext --execute --to ipynb docs/notebooks/*.py` leaves beside a
+    # notebook: the build publishes its own execution instead
+    (src / "docs" / "notebooks" / f"{NOTEBOOKS[0].stem}.ipynb").write_text(STRAY_IPYNB)
     out = tmp / "site"
     proc = subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
@@ -184,6 +194,7 @@ def test_notebook_pages_have_their_outputs(site, path):
         assert data.startswith(b"\x89PNG") and len(data) > 5_000, src
     ipynb = (site / "notebooks" / f"{path.stem}.ipynb").read_text()
     assert '"outputs": [' in ipynb and '"output_type": "stream"' in ipynb
+    assert "left by a user" not in ipynb  # the build's own execution, not a stray .ipynb
 
 
 def test_site_publishes_no_script_but_the_notebooks(site):
