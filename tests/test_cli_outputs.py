@@ -101,9 +101,48 @@ def test_out_below_a_file_is_rejected(tmp_path, capsys, no_computation):
 
 def test_out_in_an_unwritable_folder_is_rejected(tmp_path, capsys, no_computation):
     ro = _unwritable_dir(tmp_path)
-    assert main(["reproduce", SMALL, "--out", str(ro / "lpbounds-out"), *QUICK]) == 2
-    _one_line_error(capsys, "--out", "cannot write")
-    assert not (ro / "lpbounds-out").exists()
+    target = ro / "lpbounds-out"
+    assert main(["reproduce", SMALL, "--out", str(target), *QUICK]) == 2
+    line = _one_line_error(capsys, "--out", f"cannot create {str(target)!r}", f"{str(ro)!r}")
+    assert "No such file or directory" not in line  # /proc's ENOENT, about a folder that is
+    assert not target.exists()
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="a Linux /proc")
+@pytest.mark.parametrize("flag", ["--out", "--json"])
+def test_out_in_proc_says_the_folder_refuses_new_entries(flag, capsys, no_computation):
+    """/proc refuses a new file with ENOENT: "(No such file or directory)" was printed
+    about /proc, which exists; the message names the path and the folder's refusal."""
+    assert main(["solve", "garnet-small", flag, "/proc/forbidden/x"]) == 2
+    line = _one_line_error(
+        capsys, flag, "cannot create '/proc/forbidden/x'", "the folder '/proc' accepts no new"
+    )
+    assert "No such file or directory" not in line
+
+
+@pytest.mark.parametrize(
+    ("err", "words"),
+    [
+        (errno.EACCES, "is not writable (permission denied)"),
+        (errno.EPERM, "is not writable (permission denied)"),
+        (errno.EROFS, "is on a read-only file system"),
+        (errno.ENOSPC, "refused a new entry (No space left on device)"),
+    ],
+)
+def test_each_refusal_is_said_in_words(tmp_path, monkeypatch, err, words):
+    """The reason a folder refuses the probe file, for each errno (run as root, a folder
+    without write permission cannot be made: the refusal is simulated)."""
+    from lpbounds import outputs
+
+    def refuse(*args, **kwargs):
+        raise OSError(err, os.strerror(err))
+
+    monkeypatch.setattr(outputs.tempfile, "mkstemp", refuse)
+    target = tmp_path / "new" / "out"
+    with pytest.raises(OutputError) as exc:
+        outputs.check_output_dir(target)
+    text = str(exc.value)
+    assert text == f"--out: cannot create {str(target)!r}: the folder {str(tmp_path)!r} {words}"
 
 
 @pytest.mark.parametrize(
@@ -205,7 +244,7 @@ def test_json_in_an_unwritable_folder_is_rejected(tmp_path, capsys, command, no_
     model = "garnet-small" if command == "solve" else "patrol-small"
     target = _unwritable_dir(tmp_path) / "stats.json"
     assert main([command, model, "--json", str(target)]) == 2
-    _one_line_error(capsys, "--json", "cannot write")
+    _one_line_error(capsys, "--json", f"cannot create {str(target)!r}")
 
 
 @pytest.mark.parametrize(
