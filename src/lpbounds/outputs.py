@@ -295,7 +295,12 @@ def write_atomic(path: str | Path, write: Callable[[Path], Any]) -> Path:
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    os.close(fd)
+    try:
+        # mkstemp's 0600 is for temporaries: the file gets the mode a plain open() would
+        # give it (an existing file's own, else 0666 less the umask)
+        os.fchmod(fd, _file_mode(p))
+    finally:
+        os.close(fd)
     try:
         write(Path(tmp))
         os.replace(tmp, p)
@@ -371,9 +376,28 @@ class _HeldSigint:
 
 
 def _umask() -> int:
+    """The process's umask: read from /proc where the kernel shows it (Linux), else set
+    and restored at once (a file another thread creates in between would miss it)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def _file_mode(path: Path) -> int:
+    """The permission bits ``open(path, "w")`` would leave on ``path``: an existing file's
+    own, else ``0o666`` less the umask."""
+    import stat
+
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        return 0o666 & ~_umask()
 
 
 def _pid_alive(pid: int) -> bool:
