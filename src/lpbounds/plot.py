@@ -906,7 +906,7 @@ def _legend_headroom(ax: Axes, values: np.ndarray, style: Style) -> None:
     from matplotlib.font_manager import FontProperties
 
     size = FontProperties(size=kw.get("fontsize")).get_size_in_points()
-    box = ax.get_position().height * ax.figure.get_figheight() * 72.0  # axes height (pt)
+    box = float(ax.bbox.height) / float(ax.figure.dpi) * 72.0  # axes height (pt)
     band = min(0.6, ((1.5 * n + 2.0) * size) / box + 0.03)  # legend + padding, a fraction
     lo, hi = np.log10(values.min()), np.log10(values.max())
     span = max(hi - lo, 1.0)

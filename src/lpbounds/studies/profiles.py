@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -245,7 +245,8 @@ def plot_performance_profile(
     for k, col in enumerate(prof.columns):
         col = str(col)
         y = np.concatenate([prof[col].to_numpy(), [prof[col].to_numpy()[-1]]])
-        label, ls, lw = name[col], styles[(k // 10) % 4], 1.6
+        label, lw = name[col], 1.6
+        ls: Any = styles[(k // 10) % 4]  # a name, or an (offset, dashes) pattern below
         if col in same:  # the first of coinciding curves: widest, under the others
             lw = 1.6 + 1.6 * len(same[col])
             label += f" (same curve as {', '.join(same[col])})"
