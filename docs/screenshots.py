@@ -1,10 +1,12 @@
 """Screenshots of the built documentation site in headless Chromium, offline.
 
 Looks at the site the way a reader does: the home page, a formulation page with a wide
-display equation (RLP), an API page (the formulations' docstrings, with their math) and a
-notebook page, each loaded from ``file://`` in headless Chromium with every host name
-unresolvable, so a page that needed the network (a math script from a CDN, a web font)
-shows it. The PNGs go to ``<site>/_screenshots/`` (build output, not committed)::
+display equation (RLP, also in a narrow window), an API page (the formulations'
+docstrings, with their math) and a notebook page, then every other page that has a
+formula, whole (the window as tall as the page), each loaded from ``file://`` in headless
+Chromium with every host name unresolvable, so a page that needed the network (a math
+script from a CDN, a web font) shows it. The PNGs go to ``<site>/_screenshots/`` (build
+output, not committed; mkdocs.yml keeps this script out of the site)::
 
     mkdocs build --strict            # or: python docs/screenshots.py --build
     python docs/screenshots.py       # writes site/_screenshots/*.png
@@ -13,10 +15,13 @@ Chromium comes from the system's packages (Debian: ``apt-get install chromium``)
 formulas are MathML rendered by the browser (``docs/_hooks/math.py``); look at the PNGs
 to see them typeset, not as raw TeX. Beside each PNG the browser measures the page: how
 many formulas it laid out (a ``<math>`` element the browser does not render has no
-height), and each display formula wider than its box, which must scroll
-(``overflow-x: auto``) rather than be clipped; the script exits 1 if a formula is not laid
-out or is clipped. ``tests/test_docs_html.py`` checks the same pages' HTML where no browser
-is installed.
+height), any formula whose text still holds TeX (a backslash: ``\\{`` where a brace
+belongs), and each display formula wider than its box. That one must scroll
+(``overflow-x: auto``) rather than be clipped in a narrow window, and must not happen at
+all in the 1280-px views of whole pages, where a formula that scrolls shows a reader only
+its start (write it as rows: ``\\begin{array}{l} ... \\\\ ... \\end{array}``). The script
+exits 1 if a formula is not laid out, shows TeX, is clipped or does not fit.
+``tests/test_docs_html.py`` checks the same pages' HTML where no browser is installed.
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 #: name -> (page of the site, window width and height in CSS pixels)
-PAGES = {
+PAGES: dict[str, tuple[str, int, int | None]] = {
     "home": ("index.html", 1280, 1100),
     "formulation-rlp": ("formulations/rlp/index.html", 1280, 1400),
     "formulation-rlp-narrow": ("formulations/rlp/index.html", 720, 1400),
@@ -44,6 +49,8 @@ PAGES = {
     ),
     "notebook-theorem1": ("notebooks/theorem1_cost_independence/index.html", 1280, 2400),
 }
+#: the tallest window for a whole page (CSS pixels); a longer page is shot from its top
+MAX_HEIGHT = 16000
 CANDIDATES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 #: run in the page before the screenshot: keep the page from ``anchor`` on (a screenshot of
 #: a scrolled headless page comes out blank), and measure its formulas into a hidden <pre>
@@ -65,6 +72,7 @@ addEventListener("load", () => {
   const wide = [...document.querySelectorAll(".md-content .lpb-math-display")]
     .filter((d) => d.scrollWidth > d.clientWidth + 1)
     .map((d) => ({ width: d.scrollWidth, box: d.clientWidth,
+                   text: d.textContent.slice(0, 60),
                    overflow: getComputedStyle(d).overflowX }));
   const probe = document.createElement("pre");
   probe.id = "lpb-probe";
@@ -72,7 +80,10 @@ addEventListener("load", () => {
   probe.textContent = JSON.stringify({
     formulas: all.length,
     unrendered: all.filter((m) => m.getBoundingClientRect().height <= 0).length,
+    tex: all.map((m) => m.textContent)
+      .filter((t) => t.includes(String.fromCharCode(92))).slice(0, 5),
     wide: wide,
+    height: document.documentElement.scrollHeight,
   });
   document.body.appendChild(probe);
 });
@@ -95,6 +106,9 @@ def _chromium(chromium: str, url: str, width: int, height: int, *action: str) ->
             "--headless",
             "--no-sandbox",  # root in a container has no user namespace for the sandbox
             "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
             "--hide-scrollbars",
             "--no-first-run",
             f"--user-data-dir={profile}",
@@ -110,26 +124,53 @@ def _chromium(chromium: str, url: str, width: int, height: int, *action: str) ->
     return proc.stdout
 
 
-def shoot(chromium: str, page: Path, anchor: str, out: Path, size: tuple[int, int]) -> dict:
+def shoot(chromium: str, page: Path, anchor: str, out: Path, size: tuple[int, int | None]) -> dict:
     """Screenshot ``page`` (from ``anchor`` on) to ``out``; the browser's measurements.
 
     The page is copied beside itself with :data:`PROBE` added (so its links still
-    resolve), loaded twice (screenshot, then the DOM after the scripts ran), and removed.
+    resolve), loaded twice or more (the DOM after the scripts ran, then the screenshots),
+    and removed. A height of None: the window is as tall as the page, so the screenshot
+    shows all of it; a page taller than :data:`MAX_HEIGHT` is shot in parts
+    (``out``, then ``<out>-2.png``, ...), each shifted up by the ones before.
     """
     probe = PROBE.replace("ANCHOR", json.dumps(anchor))
     copy = page.with_name(f"_lpb_shot_{out.stem}.html")
-    copy.write_text(page.read_text().replace("</body>", probe + "</body>", 1))
+    text = page.read_text()
+    copy.write_text(text.replace("</body>", probe + "</body>", 1))
+    width, height = size
     try:
-        _chromium(chromium, copy.as_uri(), *size, f"--screenshot={out}")
-        dom = _chromium(chromium, copy.as_uri(), *size, "--dump-dom")
+        dom = _chromium(chromium, copy.as_uri(), width, height or 1200, "--dump-dom")
+        found = re.search(r'<pre id="lpb-probe"[^>]*>(.*?)</pre>', dom, re.S)
+        if not found:
+            raise SystemExit(f"the page {page} did not finish loading in the browser")
+        seen = dict(json.loads(found.group(1)))
+        total = int(seen["height"])
+        parts = 1 if height else -(-total // MAX_HEIGHT)
+        height = height or min(total, MAX_HEIGHT)
+        seen["files"] = []
+        for k in range(parts):
+            shot = out if k == 0 else out.with_name(f"{out.stem}-{k + 1}.png")
+            shift = f"<style>body {{ position: relative; top: -{k * MAX_HEIGHT}px; }}</style>"
+            copy.write_text(text.replace("</body>", (shift if k else "") + probe + "</body>", 1))
+            _chromium(chromium, copy.as_uri(), width, height, f"--screenshot={shot}")
+            if not shot.exists():
+                raise SystemExit(f"chromium wrote no screenshot of {page}")
+            seen["files"].append(shot)
     finally:
         copy.unlink(missing_ok=True)
-    if not out.exists():
-        raise SystemExit(f"chromium wrote no screenshot of {page}")
-    found = re.search(r'<pre id="lpb-probe"[^>]*>(.*?)</pre>', dom, re.S)
-    if not found:
-        raise SystemExit(f"the page {page} did not finish loading in the browser")
-    return dict(json.loads(found.group(1)))
+    seen["size"] = (width, height)
+    return seen
+
+
+def formula_pages(site: Path) -> dict[str, tuple[str, int, int | None]]:
+    """Every page of ``site`` with a formula (a ``<math>`` element), whole, 1280 wide."""
+    found = {}
+    for path in sorted(site.rglob("index.html")):
+        if "<math " in path.read_text():
+            rel = path.relative_to(site).as_posix()
+            name = rel.removesuffix("index.html").strip("/").replace("/", "-") or "home"
+            found[f"page-{name}"] = (rel, 1280, None)
+    return found
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -138,6 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--site", default=str(ROOT / "site"), help="the built site (default site/)")
     ap.add_argument("--build", action="store_true", help="run mkdocs build --strict first")
     ap.add_argument("--chromium", help="the browser executable (default: found on PATH)")
+    ap.add_argument("--only", metavar="TEXT", help="only the pages whose path contains TEXT")
     args = ap.parse_args(argv)
     site = Path(args.site).resolve()
     if args.build:
@@ -149,18 +191,26 @@ def main(argv: list[str] | None = None) -> int:
     folder = site / "_screenshots"
     folder.mkdir(parents=True, exist_ok=True)
     bad = 0
-    for name, (page, width, height) in PAGES.items():
+    pages: dict[str, tuple[str, int, int | None]] = {**PAGES, **formula_pages(site)}
+    if args.only:
+        pages = {name: view for name, view in pages.items() if args.only in view[0]}
+    for name, (page, width, height) in pages.items():
         path, _, anchor = page.partition("#")
         if not (site / path).exists():
             raise SystemExit(f"{site / path} is missing: is the site built from this tree?")
         out = folder / f"{name}.png"
         seen = shoot(chromium, site / path, anchor, out, (width, height))
         clipped = [w for w in seen["wide"] if w["overflow"] not in ("auto", "scroll")]
-        bad += seen["unrendered"] + len(clipped)
+        if height is None:  # a whole page at 1280 px: every formula fits, none scrolls
+            clipped = seen["wide"]
+        bad += seen["unrendered"] + len(clipped) + len(seen["tex"])
+        tex = f"; TeX left in {seen['tex']}" if seen["tex"] else ""
+        tex += "".join(f"\n    does not fit: {w['text']}..." for w in clipped)
+        more = f" (+{len(seen['files']) - 1} parts)" if len(seen["files"]) > 1 else ""
         print(
-            f"{out}  ({page}, {width} x {height}): {seen['formulas']} formulas, "
-            f"{seen['unrendered']} not laid out; {len(seen['wide'])} display formulas wider "
-            f"than their box, {len(clipped)} of them clipped"
+            f"{out}{more}  ({page}, {seen['size'][0]} x {seen['size'][1]}): {seen['formulas']} "
+            f"formulas, {seen['unrendered']} not laid out; {len(seen['wide'])} display "
+            f"formulas wider than their box, {len(clipped)} of them clipped{tex}"
         )
     return 1 if bad else 0
 

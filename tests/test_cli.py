@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 
@@ -29,6 +30,54 @@ def test_solve_writes_the_library_numbers(tmp_path, capsys):
     assert stats["residual"] <= stats["tol"]
     assert stats["value_max"] == pytest.approx(float(np.max(res.values)), abs=2 * res.error_bound)
     assert "exact solve of garnet-small" in capsys.readouterr().out
+
+
+def _meaning(text: str) -> tuple[float, float]:
+    """The interval a printed statistic claims: ``[a, b]`` as written, or a number with
+    ``k`` significant digits as its rounding cell (half a unit of its last digit)."""
+    from decimal import Decimal
+
+    text = text.strip()
+    if text.startswith("["):
+        a, b = text[1:-1].split(",")
+        return float(a), float(b)
+    d = Decimal(text.replace(",", ""))
+    half = Decimal(5) * Decimal(10) ** (d.as_tuple().exponent - 1)
+    return float(d - half), float(d + half)
+
+
+@pytest.mark.parametrize("model", ["frozenlake", "garnet-small", "patrol-small"])
+def test_solve_prints_statistics_of_v_star_that_are_true(model, capsys):
+    """Each of min, mean and max V* as printed holds the statistic of V* from an independent
+    dense policy iteration: frozenlake's least value is 0 (its sink), where the computed V
+    is 2.9e-10 ("min 2.937e-10" was printed, with an error bound of 2.9e-10)."""
+    if model == "frozenlake":
+        pytest.importorskip("gymnasium", reason="the interop extra")
+    from . import _independent as ind
+
+    assert main(["solve", model]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    at = next(k for k, ln in enumerate(lines) if "V* (certified)" in ln)
+    parts = [lines[at].split("\u2502")[2]]
+    for ln in lines[at + 1 :]:  # the cell wraps on a narrow terminal: its next lines
+        cols = ln.split("\u2502")
+        if len(cols) < 3 or cols[1].strip():
+            break
+        parts.append(cols[2])
+    cells = " ".join(p.strip() for p in parts)  # min ..., mean ..., max ...
+    said = dict(re.findall(r"(min|mean|max) (\[[^\]]*\]|[-\d.,e]+)", cells))
+    assert set(said) == {"min", "mean", "max"}, cells
+    mdp = lb.load_instance(model).mdp()
+    ref = ind.policy_iteration(
+        ind.dense_transitions(mdp.successors, mdp.probabilities_full()),
+        mdp.rewards, mdp.allowed, mdp.discount,
+    )  # fmt: skip
+    true = {"min": ref.values.min(), "mean": ref.values.mean(), "max": ref.values.max()}
+    for k, value in true.items():
+        lo, hi = _meaning(said[k])
+        assert lo - ref.error <= value <= hi + ref.error, (k, said[k], value)
+    if model == "frozenlake":
+        assert said["min"].startswith("[") and _meaning(said["min"])[0] <= 0.0
 
 
 def test_solve_bad_model_exits_with_one_clear_line(tmp_path, capsys):

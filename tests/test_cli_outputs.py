@@ -101,9 +101,48 @@ def test_out_below_a_file_is_rejected(tmp_path, capsys, no_computation):
 
 def test_out_in_an_unwritable_folder_is_rejected(tmp_path, capsys, no_computation):
     ro = _unwritable_dir(tmp_path)
-    assert main(["reproduce", SMALL, "--out", str(ro / "lpbounds-out"), *QUICK]) == 2
-    _one_line_error(capsys, "--out", "cannot write")
-    assert not (ro / "lpbounds-out").exists()
+    target = ro / "lpbounds-out"
+    assert main(["reproduce", SMALL, "--out", str(target), *QUICK]) == 2
+    line = _one_line_error(capsys, "--out", f"cannot create {str(target)!r}", f"{str(ro)!r}")
+    assert "No such file or directory" not in line  # /proc's ENOENT, about a folder that is
+    assert not target.exists()
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="a Linux /proc")
+@pytest.mark.parametrize("flag", ["--out", "--json"])
+def test_out_in_proc_says_the_folder_refuses_new_entries(flag, capsys, no_computation):
+    """/proc refuses a new file with ENOENT: "(No such file or directory)" was printed
+    about /proc, which exists; the message names the path and the folder's refusal."""
+    assert main(["solve", "garnet-small", flag, "/proc/forbidden/x"]) == 2
+    line = _one_line_error(
+        capsys, flag, "cannot create '/proc/forbidden/x'", "the folder '/proc' accepts no new"
+    )
+    assert "No such file or directory" not in line
+
+
+@pytest.mark.parametrize(
+    ("err", "words"),
+    [
+        (errno.EACCES, "is not writable (permission denied)"),
+        (errno.EPERM, "is not writable (permission denied)"),
+        (errno.EROFS, "is on a read-only file system"),
+        (errno.ENOSPC, "refused a new entry (No space left on device)"),
+    ],
+)
+def test_each_refusal_is_said_in_words(tmp_path, monkeypatch, err, words):
+    """The reason a folder refuses the probe file, for each errno (run as root, a folder
+    without write permission cannot be made: the refusal is simulated)."""
+    from lpbounds import outputs
+
+    def refuse(*args, **kwargs):
+        raise OSError(err, os.strerror(err))
+
+    monkeypatch.setattr(outputs.tempfile, "mkstemp", refuse)
+    target = tmp_path / "new" / "out"
+    with pytest.raises(OutputError) as exc:
+        outputs.check_output_dir(target)
+    text = str(exc.value)
+    assert text == f"--out: cannot create {str(target)!r}: the folder {str(tmp_path)!r} {words}"
 
 
 @pytest.mark.parametrize(
@@ -205,7 +244,7 @@ def test_json_in_an_unwritable_folder_is_rejected(tmp_path, capsys, command, no_
     model = "garnet-small" if command == "solve" else "patrol-small"
     target = _unwritable_dir(tmp_path) / "stats.json"
     assert main([command, model, "--json", str(target)]) == 2
-    _one_line_error(capsys, "--json", "cannot write")
+    _one_line_error(capsys, "--json", f"cannot create {str(target)!r}")
 
 
 @pytest.mark.parametrize(
@@ -513,3 +552,51 @@ def test_a_fifo_as_the_model_is_refused_without_opening_it(tmp_path):
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.strip().count("\n") == 0 and "Traceback" not in proc.stderr
     assert f"not a regular file: {str(fifo)!r}" in proc.stderr
+
+
+# ---------------------------------------------------------------------- file modes
+def _lpbounds(args: list[str], umask: int, cwd: Path) -> None:
+    code = "import sys; sys.argv[0] = 'lpbounds'; from lpbounds.cli.main import entry; entry()"
+    proc = subprocess.run(
+        [sys.executable, "-c", code, *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        preexec_fn=lambda: os.umask(umask),
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027])
+def test_every_command_writes_files_with_the_mode_open_would_give(tmp_path, umask):
+    """verify --out wrote 0600 (mkstemp's mode, kept by the atomic rename) where the other
+    commands wrote 0644: every file of every command gets 0666 less the umask, every
+    folder 0777 less the umask, as a plain open() and mkdir() would."""
+    verify = ["verify", "--random", "2", "--seed", "1", "--families", "garnet"]
+    verify += ["--claims", "theorem1", "--solvers", "HIGHS", "-q"]
+    _lpbounds([*verify, "--out", "v"], umask, tmp_path)
+    _lpbounds(["solve", "garnet-small", "--out", "s", "--json", "s.json", "-q"], umask, tmp_path)
+    _lpbounds(["bounds", "patrol-small", "--json", "b.json", "-q"], umask, tmp_path)
+    files = [p for p in tmp_path.rglob("*") if p.is_file()]
+    folders = [p for p in tmp_path.rglob("*") if p.is_dir()]
+    assert {"s.json", "b.json", "solution.npz"} <= {p.name for p in files}
+    assert len([p for p in files if p.is_relative_to(tmp_path / "v")]) >= 3
+    modes = {str(p.relative_to(tmp_path)): oct(p.stat().st_mode & 0o777) for p in files}
+    assert set(modes.values()) == {oct(0o666 & ~umask)}, modes
+    dirs = {str(p.relative_to(tmp_path)): oct(p.stat().st_mode & 0o777) for p in folders}
+    assert set(dirs.values()) == {oct(0o777 & ~umask)}, dirs
+
+
+def test_an_existing_file_keeps_its_mode_when_rewritten(tmp_path):
+    """As open(path, "w") would: a file the user made private stays private."""
+    from lpbounds.outputs import write_text_atomic
+
+    f = tmp_path / "stats.json"
+    f.write_text("old")
+    f.chmod(0o600)
+    write_text_atomic(f, "new")
+    assert f.read_text() == "new" and f.stat().st_mode & 0o777 == 0o600
+    f.chmod(0o664)
+    write_text_atomic(f, "newer")
+    assert f.stat().st_mode & 0o777 == 0o664

@@ -29,6 +29,28 @@ FETCH = re.compile(
     r"<(?:script|link|img|iframe|source|audio|video)\b[^>]*?\b(?:src|href)=\"([^\"]*)\""
 )
 EXTERNAL = re.compile(r"^(?:[a-z][a-z0-9+.-]*:|//)", re.I)
+#: TeX in a page's text, outside MathML and code: a command (``\Big``, ``\left``, ``\frac``)
+#: or an escaped delimiter (``\{``, ``\}``, ``\|``)
+TEX_IN_TEXT = re.compile(r"\\(?:[A-Za-z]+|[{}|])")
+#: a MathML token whose text holds a backslash: TeX the converter copied instead of reading
+#: (``<mo minsize="1.623em">\{</mo>`` shows ``\{``); every character it reads is an entity
+TEX_IN_MATH = re.compile(r"<(m[a-z]+)\b[^>]*>[^<]*\\[^<]*</\1>")
+#: the pages whose formulas have ``\Big\{ ... \Big\}`` (the NLP's defining inequality, the
+#: Bellman equation of FiniteMDP's docstring)
+SIZED_BRACES = (
+    "formulations/nlp/index.html",
+    "nlp/index.html",
+    "notebooks/nlp_bracket/index.html",
+    "api/formulations/index.html",
+    "api/models/index.html",
+)
+
+
+#: an executed notebook a user left in docs/notebooks/ (valid nbformat, with a marker)
+STRAY_IPYNB = (
+    '{"cells": [{"cell_type": "markdown", "metadata": {}, "source": ["left by a user"]}], '
+    '"metadata": {}, "nbformat": 4, "nbformat_minor": 5}'
+)
 
 
 @pytest.fixture(scope="module")
@@ -42,6 +64,9 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copy(ROOT / "mkdocs.yml", src / "mkdocs.yml")
     (src / "src").symlink_to(ROOT / "src")
     (src / "examples").symlink_to(ROOT / "examples")
+    # what the README's `jupytext --execute --to ipynb docs/notebooks/*.py` leaves beside a
+    # notebook: the build publishes its own execution instead
+    (src / "docs" / "notebooks" / f"{NOTEBOOKS[0].stem}.ipynb").write_text(STRAY_IPYNB)
     out = tmp / "site"
     proc = subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
@@ -88,15 +113,67 @@ def test_formulas_are_mathml(site):
     for name, html in pages.items():
         # arithmatex's markers, or TeX delimiters in the text (page or table of contents)
         raw = re.findall(r'class="arithmatex"|\\\(|\\\[|\$\$', _text(html))
+        raw += TEX_IN_TEXT.findall(_text(html))  # a \Big, \left or \{ outside MathML
+        raw += [m.group(0) for m in TEX_IN_MATH.finditer(html)]  # or inside it, as text
         if raw:
             left[name] = raw[:3]
     assert not left, f"formulas left as TeX: {left}"
+
+
+def test_sized_braces_are_drawn_as_braces(site):
+    """``\\Big\\{ ... \\Big\\}``: a stretchy brace at TeX's \\Big size, not the text ``\\{``."""
+    pages = _pages(site)
+    for name in SIZED_BRACES:
+        for code in ("0007B", "0007D"):  # { and }
+            brace = rf'<mo stretchy="true" minsize="1\.623em" maxsize="1\.623em">&#x{code};</mo>'
+            assert re.search(brace, pages[name]), f"{name}: no \\Big brace &#x{code};"
+
+
+def _math_hook():
+    import importlib.util
+
+    pytest.importorskip("latex2mathml", reason=REASON)
+    pytest.importorskip("mkdocs", reason=REASON)
+    spec = importlib.util.spec_from_file_location("lpb_docs_math", DOCS / "_hooks" / "math.py")
+    assert spec is not None and spec.loader is not None
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    return hook
+
+
+@pytest.mark.parametrize("size", ["big", "Big", "bigg", "Bigg", "Bigl", "Bigr", "biggl"])
+@pytest.mark.parametrize(
+    ("tex", "code"),
+    [
+        ("\\{", "0007B"), ("\\}", "0007D"), ("\\lbrace", "0007B"), ("\\|", "02016"),
+        ("\\langle", "027E8"), ("\\rangle", "027E9"), ("\\lvert", "0007C"),
+        ("\\lfloor", "0230A"), ("\\rceil", "02309"), ("\\Vert", "02016"),
+    ],
+)  # fmt: skip
+def test_every_sized_delimiter_becomes_its_character(size, tex, code):
+    """The hook writes each sized delimiter as its character (latex2mathml copies its TeX)."""
+    out = _math_hook().to_mathml(f"\\{size}{tex} x", display=True)
+    assert re.search(rf'<mo [^>]*stretchy="true"[^>]*minsize="[0-9.]+em"[^>]*>&#x{code};</mo>', out)
+    assert not TEX_IN_MATH.search(out), out
+
+
+@pytest.mark.parametrize("tex", ["\\nosuchcommand x", "\\Big\\nosuchdelimiter x", "a & b"])
+def test_unread_tex_fails_the_build(tex):
+    with pytest.raises(ValueError, match="left as text"):
+        _math_hook().to_mathml(tex, display=False)
 
 
 def test_wide_equations_scroll(site):
     css = (site / "stylesheets" / "lpbounds.css").read_text()
     block = re.search(r"\.lpb-math-display\s*\{([^}]*)\}", css)
     assert block and re.search(r"overflow-x:\s*auto", block.group(1)), "display math clips"
+    # a long formula is written as rows (\begin{array}{l}): MathML Core ignores latex2mathml's
+    # columnalign, so the style sheet says it, or the rows come out centred
+    for side in ("left", "right"):
+        rule = rf'mtd\[columnalign="{side}"\]\s*\{{\s*text-align:\s*{side};'
+        assert re.search(rule, css), f"no text-align for columnalign={side}"
+    rows = (site / "formulations" / "rlp" / "index.html").read_text()
+    assert re.search(r'<div class="lpb-math-display"><math [^>]*>\s*<mrow>\s*<mtable>', rows)
     for name, html in _pages(site).items():
         if "lpb-math" in html:
             assert "stylesheets/lpbounds.css" in html, f"{name} does not load lpbounds.css"
@@ -117,6 +194,14 @@ def test_notebook_pages_have_their_outputs(site, path):
         assert data.startswith(b"\x89PNG") and len(data) > 5_000, src
     ipynb = (site / "notebooks" / f"{path.stem}.ipynb").read_text()
     assert '"outputs": [' in ipynb and '"output_type": "stream"' in ipynb
+    assert "left by a user" not in ipynb  # the build's own execution, not a stray .ipynb
+
+
+def test_site_publishes_no_script_but_the_notebooks(site):
+    """docs/ holds tools (docs/screenshots.py, docs/_hooks/): none is a file of the site."""
+    scripts = sorted(p.relative_to(site).as_posix() for p in site.rglob("*.py"))
+    assert scripts == sorted(f"notebooks/{p.name}" for p in NOTEBOOKS)
+    assert not (site / "screenshots.py").exists() and not (site / "screenshots").exists()
 
 
 def test_notebooks_are_in_the_navigation(site):

@@ -13,6 +13,7 @@ does not execute them again.
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 from typing import Any
 
@@ -100,6 +101,34 @@ def test_a_failing_notebook_is_reported(executed):
     err = executed["false_claim"]
     assert isinstance(err, Exception), "a notebook whose assert fails was not reported"
     assert "the sum is 6" in HOOK.ANSI.sub("", str(err))
+
+
+#: the README's commands for the notebooks (its "Notebooks" paragraph)
+OPEN = 'pip install -e ".[notebooks]" && jupyter lab docs/notebooks'
+RUN = "jupytext --execute --to ipynb docs/notebooks/*.py"
+
+
+def test_the_notebooks_extra_opens_and_runs_them():
+    """One extra installs what the README's commands need; CI runs them in a fresh venv."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib  # type: ignore[no-redef]
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    names = {
+        re.split(r"[<>=!~\[; ]", req, maxsplit=1)[0].lower()
+        for req in project["optional-dependencies"]["notebooks"]
+    }
+    # jupytext reads the .py files; --execute runs them with nbconvert (without it: "nbconvert
+    # is required"); jupyterlab opens them (jupytext's lab extension); ipykernel is the
+    # kernel; nbclient runs them in the docs build; gymnasium for the Gymnasium notebook
+    need = {"jupytext", "nbconvert", "jupyterlab", "ipykernel", "nbclient", "gymnasium"}
+    assert need <= names, need - names
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert OPEN in readme and RUN in readme
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert 'pip install -q -e ".[notebooks]"' in ci and RUN in ci
 
 
 def test_page_of_a_notebook_shows_its_outputs(executed):

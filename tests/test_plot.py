@@ -272,6 +272,45 @@ def test_dp_residuals_leaves_out_exact_zeros_and_says_so():
     assert_legend_visible(ax.figure)
 
 
+def _legend_covers(ax: Axes) -> list[str]:
+    """What the legend's box covers: the tolerance line, or a drawn point (display space)."""
+    fig = ax.figure
+    fig.canvas.draw()
+    box = ax.get_legend().get_window_extent(fig.canvas.get_renderer()).padded(2)
+    covered = []
+    for line in ax.get_lines():
+        label = str(line.get_label())
+        if label.startswith("stopping tolerance"):
+            y = ax.transData.transform((0.0, _y(line)[0]))[1]
+            if box.y0 <= y <= box.y1:
+                covered.append(label)
+            continue
+        path = line.get_transform().transform_path(line.get_path())  # display space
+        if box.count_contains(path.vertices) or path.intersects_bbox(box, filled=False):
+            covered.append(label)
+    return covered
+
+
+@pytest.mark.parametrize("method", ["vi", "mpi", "pi"])
+@pytest.mark.parametrize("size", [(8.0, 4.4), (7.0, 4.0), (5.0, 3.0)])
+def test_dp_residuals_legend_covers_no_line_nor_point(method, size):
+    """MPI's legend used to sit on the tolerance line ("best" finds no free corner for its
+    long labels); the legend now has a band of its own above everything drawn."""
+    dp = lb.solve_exact(lb.garnet(40, 3, 3, 0.9, seed=1), method)
+    fig = Figure(figsize=size, dpi=100)
+    FigureCanvasAgg(fig)
+    ax = plot.dp_residuals(dp, ax=fig.add_subplot())
+    assert not _legend_covers(ax), _legend_covers(ax)
+    assert_legend_visible(fig, expect=("residual per", "stopping", "residual of"))
+
+
+def test_dp_residuals_legend_check_sees_a_covered_line():
+    """The check above fails where the legend is put back over the tolerance line."""
+    dp = lb.solve_exact(lb.garnet(40, 3, 3, 0.9, seed=1), "mpi")
+    ax = plot.dp_residuals(dp, ax=_axes(), legend={"loc": "lower left"})
+    assert any(c.startswith("stopping tolerance") for c in _legend_covers(ax))
+
+
 # ---------------------------------------------------------------------- axes out
 @pytest.mark.parametrize("which", ["bounds", "gap", "nlp_bracket", "dp_residuals"])
 def test_without_axes_each_plot_makes_a_figure(case, which):

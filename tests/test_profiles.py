@@ -10,6 +10,8 @@ import pytest
 
 from lpbounds.errors import ValidationError
 from lpbounds.studies.profiles import (
+    coinciding_profiles,
+    new_figure,
     performance_profile,
     performance_ratios,
     plot_performance_profile,
@@ -17,6 +19,8 @@ from lpbounds.studies.profiles import (
     shifted_geometric_mean,
 )
 from lpbounds.studies.report import profile_tables, solver_summary
+
+from ._figures import assert_legend_visible
 
 INF = math.inf
 
@@ -68,6 +72,49 @@ def test_profile_breakpoints():
 def test_profile_png(tmp_path):
     path = plot_performance_profile(TABLE, tmp_path / "p.png", title="t", measure="time")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_coinciding_profiles_are_found():
+    table = TABLE.assign(D=TABLE["A"], E=TABLE["B"])  # D: A's measures, E: B's
+    assert coinciding_profiles(performance_profile(table)) == {"A": ["D"], "B": ["E"]}
+    assert coinciding_profiles(performance_profile(TABLE)) == {}
+
+
+def test_every_profile_shows_where_curves_coincide(tmp_path, monkeypatch):
+    """SCIPY (HiGHS inside) drawn over HIGHS:simplex's identical curve hid it; now each
+    curve of a coinciding group shows (pixels of every legend colour outside the legend)
+    and its legend entry says which curve it shares."""
+    from lpbounds.studies import profiles
+
+    made = []
+
+    def keep(size):
+        made.append(new_figure(size))
+        return made[-1]
+
+    monkeypatch.setattr(profiles, "new_figure", keep)
+    table = TABLE.assign(HIGHS=TABLE["A"], SCIPY=TABLE["A"], OTHER=TABLE["C"])
+    plot_performance_profile(table, tmp_path / "p.png", title="t", measure="error")
+    fig = made[0]
+    texts = [t.get_text().replace("\n", " ") for t in fig.axes[0].get_legend().get_texts()]
+    assert texts[0] == "A (same curve as HIGHS, SCIPY)" and texts[3] == "HIGHS (same curve as A)"
+    assert texts[2] == "C (same curve as OTHER)" and texts[4] == "SCIPY (same curve as A)"
+    assert_legend_visible(fig)
+
+
+def test_the_pixel_check_sees_a_curve_drawn_over(tmp_path, monkeypatch):
+    """The control: with every curve drawn alike (as before), A's colour is covered."""
+    from lpbounds.studies import profiles
+
+    made = []
+    monkeypatch.setattr(
+        profiles, "new_figure", lambda size: made.append(new_figure(size)) or made[-1]
+    )
+    monkeypatch.setattr(profiles, "coinciding_profiles", lambda prof: {})
+    table = TABLE[["A"]].assign(HIGHS=TABLE["A"])
+    plot_performance_profile(table, tmp_path / "p.png", title="t", measure="error")
+    with pytest.raises(AssertionError, match="not visible"):
+        assert_legend_visible(made[0])
 
 
 @pytest.mark.parametrize(

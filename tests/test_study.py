@@ -449,3 +449,37 @@ def test_cli_rejects_bad_limits_and_shifts(capsys, tmp_path, flag, value):
     assert exc.value.code == 2
     assert f"argument {flag}" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_study_png_shows_every_problem_and_no_vertical_line(tmp_path, monkeypatch):
+    """Problems of the same size (two garnets with 100 states: their ELPs have 100
+    variables, their RLPs 10) are each a point; the line of a solver has one y per x, so it
+    never runs vertically through them; every legend entry shows."""
+    from lpbounds.studies import report
+    from lpbounds.studies.profiles import new_figure
+
+    from ._figures import assert_legend_visible
+
+    made = []
+    monkeypatch.setattr(
+        report, "new_figure", lambda size: made.append(new_figure(size)) or made[-1]
+    )
+    result = run_study(
+        ["garnet:100:10:1", "garnet:100:10:2", "garnet:300:10:3"],
+        ["ELP", "RLP"],
+        ["HIGHS:simplex", "CLARABEL:default"],
+        repeat=2,
+        jobs=1,
+    )
+    report.plot_study(result.frame, tmp_path / "study.png")
+    ax1 = made[0].axes[0]
+    for line in ax1.get_lines():
+        x = np.asarray(line.get_xdata(), dtype=float)
+        assert (np.diff(x) > 0).all(), f"a vertical segment in {line.get_label()}: x = {x}"
+    points = np.concatenate([c.get_offsets() for c in ax1.collections])
+    # every (instance, solver, formulation) with a point is drawn: 3 x 2 x 2
+    assert len(points) == 12
+    frame = result.frame
+    per = frame.groupby(["instance", "config", "formulation"])["solve_seconds"].median()
+    assert sorted(points[:, 1].tolist()) == sorted(per.tolist())
+    assert_legend_visible(made[0], allow_shared=("ELP", "RLP"))

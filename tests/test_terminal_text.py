@@ -303,3 +303,24 @@ print("ok")
 """
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr
+
+
+# ---------------------------------------------------------------------- one label per message
+#: a log line whose message starts with a second label ("lpbounds: WARNING: note: ...")
+TWO_LABELS = re.compile(r"^lpbounds: [A-Z]+: (?:note|warning|error|info|debug)\b", re.I | re.M)
+
+
+def test_compare_notes_have_one_label(tmp_path, monkeypatch, capsys):
+    """A study's notes reach stderr as warnings, labelled once: "lpbounds: WARNING: no
+    time-limit option known ...", not "lpbounds: WARNING: note: ..."."""
+    from lpbounds.formulations import solvers
+
+    monkeypatch.delitem(solvers.TIME_LIMIT_OPTIONS, "CLARABEL")  # a note: runs without one
+    argv = ["compare", "garnet:40:5:1", "--formulations", "RLP", "--solvers", "CLARABEL"]
+    argv += ["--time-limit", "60", "--jobs", "1", "--out", str(tmp_path / "cmp")]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "lpbounds: WARNING: no time-limit option known for CLARABEL" in err, err
+    assert not TWO_LABELS.search(err), TWO_LABELS.search(err).group()
+    assert not TWO_LABELS.search("lpbounds: WARNING: no time-limit option known")
+    assert TWO_LABELS.search("lpbounds: WARNING: note: no time-limit option known")

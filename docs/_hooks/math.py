@@ -14,9 +14,16 @@ from a ``file://`` copy of the site.
   ``docs/stylesheets/lpbounds.css`` lets that container scroll sideways, so an equation
   wider than the page scrolls instead of being clipped.
 
+latex2mathml writes the delimiter of a sized delimiter (``\\big``, ``\\Big``, ``\\bigg``,
+``\\Bigg`` and their ``l``/``r``/``m`` forms) as its TeX: ``\\Big\\{`` came out as
+``<mo minsize="1.623em">\\{</mo>``, which a browser shows as the two characters ``\\{``.
+:func:`to_mathml` replaces every such delimiter by its character (latex2mathml's own table,
+the one ``\\left`` uses) and marks it stretchy, so it is drawn at the size asked for.
+
 A formula the converter cannot read, or reads only partly (an unknown command kept as
-text, an ``&`` alignment outside a matrix), fails the build with the page and the TeX:
-a formula that would show as raw TeX is an error, as in ``mkdocs build --strict``.
+text, an ``&`` alignment outside a matrix, any backslash left in the MathML's text), fails
+the build with the page and the TeX: a formula that would show as raw TeX is an error, as
+in ``mkdocs build --strict``.
 """
 
 from __future__ import annotations
@@ -31,9 +38,13 @@ from mkdocs.exceptions import PluginError
 MARKED = re.compile(r'<(?P<tag>span|div) class="arithmatex">(?P<tex>.*?)</(?P=tag)>', re.S)
 #: an inline formula in a table-of-contents title (the heading's text, markup stripped)
 TOC_TEX = re.compile(r"\\\((?P<tex>.+?)\\\)")
-#: what latex2mathml leaves of a command it does not know: ``<mi>\name</mi>``, or an
-#: alignment ``&`` as an identifier
-UNREAD = re.compile(r"<m[io][^>]*>(?:\\[A-Za-z]+|&amp;|&)</m[io]>")
+#: what latex2mathml leaves of TeX it did not read: any backslash in the MathML's text (a
+#: command it does not know, ``<mi>\name</mi>``; an escaped delimiter, ``<mo>\{</mo>``;
+#: every character it does know is written as an entity, ``\backslash`` as ``&#x0005C;``),
+#: or an alignment ``&`` as an identifier
+UNREAD = re.compile(r"<(m[a-z]+)\b[^>]*>(?:[^<]*\\[^<]*|&amp;|&)</\1>")
+#: a sized delimiter (``\Big\{``): an ``<mo>`` with a ``minsize`` holding the delimiter's TeX
+SIZED = re.compile(r"<mo (?P<attrs>[^>]*\bminsize=[^>]*)>(?P<tex>\\[^<]+)</mo>")
 
 
 def _strip(tex: str, inline: bool) -> str:
@@ -44,6 +55,17 @@ def _strip(tex: str, inline: bool) -> str:
         if tex.startswith(left) and tex.endswith(right):
             return tex[len(left) : len(tex) - len(right)].strip()
     return tex
+
+
+def _sized(m: re.Match[str]) -> str:
+    """A sized delimiter's ``<mo>`` with its character in place of its TeX."""
+    from latex2mathml.symbols_parser import convert_symbol
+
+    code = convert_symbol(m["tex"])
+    if code is None:  # not a delimiter latex2mathml knows: left for UNREAD to report
+        return m.group(0)
+    attrs = m["attrs"] if "stretchy=" in m["attrs"] else f'stretchy="true" {m["attrs"]}'
+    return f"<mo {attrs}>&#x{code};</mo>"
 
 
 def to_mathml(tex: str, *, display: bool) -> str:
@@ -67,6 +89,7 @@ def to_mathml(tex: str, *, display: bool) -> str:
         out = convert(tex, display="block" if display else "inline")
     except Exception as err:  # latex2mathml raises several kinds for unreadable TeX
         raise ValueError(f"cannot convert {tex!r} to MathML: {type(err).__name__} {err}") from err
+    out = SIZED.sub(_sized, out)
     bad = UNREAD.search(out)
     if bad:
         raise ValueError(f"cannot convert {tex!r} to MathML: {bad.group(0)!r} left as text")

@@ -192,14 +192,16 @@ def _banner(stem: str, absent: list[str]) -> str:
             '!!! warning "Not executed when this site was built"\n'
             f"    This notebook needs {names}, which the build's Python did not have, so "
             "its code is shown without outputs. Install it (`pip install "
-            f'"lpbounds[interop]"`) and run the notebook, downloaded {links}.'
+            f'"lpbounds[notebooks]"`) and run the notebook, downloaded {links}.'
         )
     return (
         '!!! info "A notebook, executed when this site was built"\n'
         f"    This page is `docs/notebooks/{stem}.py`, a notebook kept as text (jupytext's "
         "percent format). Building the site executed it; every output below is from that "
-        f"run. Download it [executed (.ipynb)]({stem}.ipynb) or {links} "
-        "(`jupytext --to ipynb` converts the text; `jupyter lab` opens either)."
+        f"run. Download it [executed (.ipynb)]({stem}.ipynb) or {links}; "
+        '`pip install "lpbounds[notebooks]"` installs what opens either (`jupyter lab`; '
+        "a `.py`: right-click, Open With, Notebook) and runs them "
+        "(`jupytext --execute --to ipynb`)."
     )
 
 
@@ -327,6 +329,14 @@ def _executed(paths: list[Path]) -> list[Any]:
     return out
 
 
+def _put(files: Any, file: Any) -> None:
+    """Add ``file`` to the site, in place of a file of the same name."""
+    old = files.get_file_from_path(file.src_uri)
+    if old is not None:
+        files.remove(old)
+    files.append(file)
+
+
 def on_files(files: Any, config: Any) -> Any:
     """Add one page, one ``.ipynb`` and its figures for every ``docs/notebooks/*.py``."""
     import nbformat
@@ -337,12 +347,16 @@ def on_files(files: Any, config: Any) -> Any:
         key=lambda f: f.src_uri,
     )
     paths = [Path(f.abs_src_path) for f in sources if f.abs_src_path]
+    # an .ipynb beside the .py (left by `jupytext --execute --to ipynb`) is not published:
+    # the site's notebooks are the ones this build executed
+    for f in [f for f in files if re.fullmatch(rf"{FOLDER}/[^/]+\.ipynb", f.src_uri)]:
+        files.remove(f)
     for path, nb in zip(paths, _executed(paths), strict=True):
         text, images = to_markdown(nb, path.stem)
-        files.append(File.generated(config, f"{FOLDER}/{path.stem}.md", content=text))
+        _put(files, File.generated(config, f"{FOLDER}/{path.stem}.md", content=text))
         if not missing(nb):
             ipynb = nbformat.writes(nb)
-            files.append(File.generated(config, f"{FOLDER}/{path.stem}.ipynb", content=ipynb))
+            _put(files, File.generated(config, f"{FOLDER}/{path.stem}.ipynb", content=ipynb))
         for name, data in images.items():
-            files.append(File.generated(config, f"{FOLDER}/{name}", content=data))
+            _put(files, File.generated(config, f"{FOLDER}/{name}", content=data))
     return files

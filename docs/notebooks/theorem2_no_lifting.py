@@ -19,9 +19,11 @@
 # partition values, each constrained by the Bellman rows of the previous one, cyclically,
 #
 # $$
-# IB := \min \sum_{j=1}^L \bar c^T v_j \quad \text{s.t.} \quad
-# v_{j+1}(i) \ge R_u(x) + \lambda \sum_l p_l\, v_j(\bar f(x,u,Y_l)) \ (j < L), \quad
-# v_1(i) \ge R_u(x) + \lambda \sum_l p_l\, v_L(\bar f(x,u,Y_l)),
+# \begin{array}{l}
+# IB := \min \sum_{j=1}^L \bar c^T v_j \quad \text{s.t.} \\
+# \qquad v_{j+1}(i) \ge R_u(x) + \lambda \sum_l p_l\, v_j(\bar f(x,u,Y_l)) \ (j < L), \\
+# \qquad v_1(i) \ge R_u(x) + \lambda \sum_l p_l\, v_L(\bar f(x,u,Y_l)),
+# \end{array}
 # $$
 #
 # for every $x \in S_i$, $i$ and $u$. For $L = 1$ this is RLP.
@@ -34,8 +36,10 @@
 # the surplus of its Bellman inequality, and price it with $d \ge 0$:
 #
 # $$
-# LLP := \min \bar c^T v + d^T z \quad \text{s.t.} \quad
-# z_u(x) = v(i) - R_u(x) - \lambda \sum_l p_l\, v(\bar f(x,u,Y_l)),\quad z \ge 0 .
+# \begin{array}{l}
+# LLP := \min \bar c^T v + d^T z \quad \text{s.t.} \\
+# \qquad z_u(x) = v(i) - R_u(x) - \lambda \sum_l p_l\, v(\bar f(x,u,Y_l)),\quad z \ge 0 .
+# \end{array}
 # $$
 #
 # The projection of its feasible set onto $v$ is RLP's, so its optimal $v$ is never
@@ -70,6 +74,7 @@ for L in range(1, 6):
     res = IB(mdp, part, L, cost=rng.random(mdp.n_states)).solve("HIGHS")
     blocks = res.extra["blocks"]  # shape (L, M): one row per block v_j
     assert (blocks >= vstar - tol).all(), L  # Theorem 2
+    assert np.abs(blocks - vstar).max() <= tol, L  # the words below: every block is v*
     rows.append(
         {
             "L": L,
@@ -99,18 +104,42 @@ lifted = {}
 for s in scales:
     d = np.zeros((mdp.n_states, mdp.n_actions))
     d[part.labels == 0] = s  # price the surplus of the rows of S_0 only
-    v = LLP(mdp, part, d).solve("HIGHS").values
+    llp = LLP(mdp, part, d)
+    v = llp.solve("HIGHS").values
     assert (v >= vstar - tol).all(), s  # never below RLP's v*
+    # the effective cost g = c-bar + A^T d (A: RLP's row of each pair, as LLP builds it)
+    a_rows, _ = llp.rows.constraint_matrix()
+    x, u = llp.pairs[:, 0], llp.pairs[:, 1]
+    g = (
+        np.bincount(part.labels, minlength=part.n_partitions)
+        + a_rows[llp.rows.pair_row[x, u]].T @ d[x, u]
+    )
+    if (g >= 0).all():  # the words above: while g >= 0 the optimum is v* again
+        assert np.abs(v - vstar).max() <= tol, s
     lifted[s] = v
     low, high = (v - vstar).min(), (v - vstar).max()
-    print(f"d = {s:>5g} on S_0: v - v* between {low:9.2g} and {high:9.2g}")
+    print(f"d = {s:>5g} on S_0: min g {g.min():8.2f}; v - v* between {low:9.2g} and {high:9.2g}")
+# "once it is large enough, the optimal v moves, but only upwards"
+assert np.abs(lifted[scales[0]] - vstar).max() <= tol
+assert (lifted[scales[-1]] - vstar).max() > 100 * tol
+
+# %% [markdown]
+# In the figure a bar of height 0 (LLP's $v$ is $v^*$, up to the solver's accuracy) would
+# not show; it is drawn as a marker on the zero line, and its legend entry says so.
 
 # %%
 fig, ax = plt.subplots(figsize=(8, 3.4))
 width = 0.2
 i = np.arange(part.n_partitions)
 for k, s in enumerate(scales):
-    ax.bar(i + (k - 1.5) * width, lifted[s] - vstar, width, label=f"d = {s:g} on $S_0$")
+    diff = lifted[s] - vstar
+    at = i + (k - 1.5) * width
+    color = f"C{k}"
+    if np.abs(diff).max() <= tol:  # height 0: a marker on the line, said in the legend
+        label = f"d = {s:g} on $S_0$: 0 (= $v^*$)"
+        ax.plot(at, np.zeros_like(at), "D", color=color, ms=5, clip_on=False, label=label)
+    else:
+        ax.bar(at, diff, width, color=color, label=f"d = {s:g} on $S_0$")
 ax.axhline(0.0, color="k", lw=0.8)
 ax.set(
     xlabel="partition i",
@@ -119,3 +148,10 @@ ax.set(
 )
 ax.legend(fontsize=8)
 ax.grid(alpha=0.3, axis="y")
+# every legend entry shows: bars at least 2% of the axes tall, or markers on the zero line
+top = ax.get_ylim()[1]
+for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+    if hasattr(handle, "patches"):  # a bar series
+        assert min(p.get_height() for p in handle.patches) >= 0.02 * top, label
+    else:
+        assert handle.get_marker() == "D" and not handle.get_clip_on(), label

@@ -189,15 +189,32 @@ def _existing_ancestor(path: Path) -> Path:
     return p
 
 
-def _probe_writable(folder: Path, what: str) -> None:
-    """Create and remove a temporary file in ``folder``; OutputError if that fails."""
+def _refusal(folder: Path, exc: OSError) -> str:
+    """Why ``folder`` refused a new entry, in words that name the folder: the error's own
+    text misleads where a virtual file system refuses with ENOENT (``/proc``: "No such
+    file or directory" about a folder that exists)."""
+    import errno
+
+    where = f"the folder {str(folder)!r}"
+    if exc.errno in (errno.EACCES, errno.EPERM):
+        return f"{where} is not writable (permission denied)"
+    if exc.errno == errno.EROFS:
+        return f"{where} is on a read-only file system"
+    if exc.errno in (errno.ENOENT, errno.ENOTDIR) and folder.is_dir():
+        return f"{where} accepts no new entries (its file system refuses them)"
+    return f"{where} refused a new entry ({exc.strerror or exc})"
+
+
+def _probe_writable(folder: Path, what: str, target: Path) -> None:
+    """Create and remove a temporary file in ``folder``, where ``target`` is to be made;
+    OutputError naming ``target`` and the folder's reason if that fails."""
     if not folder.is_dir():
         raise OutputError(f"{what}: {str(folder)!r} is not a directory")
     try:
         fd, name = tempfile.mkstemp(prefix=".lpbounds-probe-", dir=folder)
     except OSError as exc:
         raise OutputError(
-            f"{what}: cannot write into {str(folder)!r} ({exc.strerror or exc})"
+            f"{what}: cannot create {str(target)!r}: {_refusal(folder, exc)}"
         ) from exc
     os.close(fd)
     os.unlink(name)
@@ -217,7 +234,7 @@ def check_output_file(path: str | Path, what: str = "output") -> Path:
     p = Path(path)
     if p.is_dir():
         raise OutputError(f"{what}: {str(p)!r} is a directory, not a file")
-    _probe_writable(_existing_ancestor(p.parent), what)
+    _probe_writable(_existing_ancestor(p.parent), what, p)
     return p
 
 
@@ -237,7 +254,7 @@ def _check_dir(p: Path, what: str, replaceable: Sequence[str]) -> None:
                 f"{what}: {str(p)!r} holds {len(foreign)} entries this command does not write "
                 f"({shown}); it replaces the folder as a whole, so give a new or empty folder"
             )
-    _probe_writable(_existing_ancestor(p.parent), what)
+    _probe_writable(_existing_ancestor(p.parent), what, p)
 
 
 def check_output_dir(
@@ -278,7 +295,12 @@ def write_atomic(path: str | Path, write: Callable[[Path], Any]) -> Path:
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    os.close(fd)
+    try:
+        # mkstemp's 0600 is for temporaries: the file gets the mode a plain open() would
+        # give it (an existing file's own, else 0666 less the umask)
+        os.fchmod(fd, _file_mode(p))
+    finally:
+        os.close(fd)
     try:
         write(Path(tmp))
         os.replace(tmp, p)
@@ -354,9 +376,28 @@ class _HeldSigint:
 
 
 def _umask() -> int:
+    """The process's umask: read from /proc where the kernel shows it (Linux), else set
+    and restored at once (a file another thread creates in between would miss it)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def _file_mode(path: Path) -> int:
+    """The permission bits ``open(path, "w")`` would leave on ``path``: an existing file's
+    own, else ``0o666`` less the umask."""
+    import stat
+
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        return 0o666 & ~_umask()
 
 
 def _pid_alive(pid: int) -> bool:

@@ -886,8 +886,33 @@ _DP_STYLE: dict[str, dict[str, Any]] = {
     "residual_line": {"color": "tab:blue", "marker": ".", "lw": 1.2, "label": None},
     "tolerance_line": {"color": "tab:red", "ls": "--", "lw": 1.2},
     "final": {"marker": "*", "ls": "none", "ms": 11, "color": "tab:green", "zorder": 5},
-    "legend": {"fontsize": 8},
+    "legend": {"fontsize": 8, "loc": "upper right"},
 }
+
+
+def _legend_headroom(ax: Axes, values: np.ndarray, style: Style) -> None:
+    """A log y-axis whose top band holds the legend and no data.
+
+    The legend's labels are long (a residual, a tolerance, an error bound), so on an axes
+    of the usual width no corner is free of the residual line, the tolerance line and the
+    final star ("best" put it over the tolerance line). The y-axis is extended upward by
+    the legend's height (estimated from its entries and font size, in points, against the
+    axes' height), so an upper legend covers nothing drawn.
+    """
+    kw = style.get("legend")
+    n = len(ax.get_legend_handles_labels()[0])
+    if kw is None or n == 0 or values.size == 0:
+        return
+    from matplotlib.font_manager import FontProperties
+
+    size = FontProperties(size=kw.get("fontsize")).get_size_in_points()
+    box = float(ax.bbox.height) / float(ax.figure.dpi) * 72.0  # axes height (pt)
+    band = min(0.6, ((1.5 * n + 2.0) * size) / box + 0.03)  # legend + padding, a fraction
+    lo, hi = np.log10(values.min()), np.log10(values.max())
+    span = max(hi - lo, 1.0)
+    bottom = lo - 0.05 * span
+    top = bottom + (hi - bottom) / (1.0 - band)
+    ax.set_ylim(10.0**bottom, 10.0**top)
 
 
 def dp_residuals(dp_result: Any, *, ax: Any = None, **style: Any) -> Axes:
@@ -897,7 +922,9 @@ def dp_residuals(dp_result: Any, *, ax: Any = None, **style: Any) -> Axes:
     0), with the stopping tolerance ``dp_result.tol`` as a dashed line and the residual
     measured on the returned values (``dp_result.residual``, which gives the certified
     ``error_bound``) as a star after the last sweep. Residuals of exactly 0 have no place
-    on a log scale: they are left out and counted in the legend.
+    on a log scale: they are left out and counted in the legend. The legend sits in a band
+    at the top of the axes, above every point and line drawn (the y-axis is extended for
+    it), so it never covers the tolerance line.
 
     Parameters
     ----------
@@ -958,5 +985,11 @@ def dp_residuals(dp_result: Any, *, ax: Any = None, **style: Any) -> Axes:
     ax.set_yscale("log")
     ax.set_xlabel("improvement sweep")
     ax.set_ylabel("||T V - V||_inf")
+    drawn = [h[pos]]
+    if tol is not None and np.isfinite(tol) and tol > 0 and st["tolerance_line"] is not None:
+        drawn.append(np.array([float(tol)]))
+    if res is not None and float(res) > 0 and st["final"] is not None:
+        drawn.append(np.array([float(res)]))
+    _legend_headroom(ax, np.concatenate(drawn), st)
     _legend(ax, st)
     return ax

@@ -119,6 +119,24 @@ def test_every_plot_writes_a_png(model, tmp_path, monkeypatch):
     assert any(label.startswith("outside the bounds") for label in seen["f5.png"])
 
 
+def test_figure7_legend_names_the_policies_as_the_report_does(tmp_path, monkeypatch):
+    """The Monte Carlo's keys (pi_star, pi_s) read pi* and pi_s in Figure 7's legends, as in
+    report.md, and every entry shows in the image."""
+    seen = {}
+    monkeypatch.setattr(figs, "save_figure", lambda fig, path: seen.setdefault("fig", fig))
+    rng = np.random.default_rng(1)
+    figs.plot_histograms(
+        {"pi_star": rng.integers(0, 9, 60), "pi_s": rng.integers(0, 12, 50)},
+        {"pi_star": rng.integers(1, 4, 60), "pi_s": rng.integers(0, 4, 50)},
+        tmp_path / "f7.png",
+    )
+    fig = seen["fig"]
+    texts = [t.get_text() for ax in fig.axes for t in ax.get_legend().get_texts()]
+    assert texts == [r"$\pi^*$ (n = 60)", r"$\pi_s$ (n = 50)", r"$\pi^*$", r"$\pi_s$"]
+    assert not any("pi_star" in t or "pi_s" == t for t in texts)
+    assert_legend_visible(fig, expect=(r"$\pi^*$", r"$\pi_s$"))
+
+
 # ---------------------------------------------------------------------- what each figure claims
 @pytest.fixture(scope="module")
 def small():

@@ -7,6 +7,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 import subprocess
 import sys
 import textwrap
@@ -254,6 +255,18 @@ def test_lemma3_differences_are_the_capped_type1_partitions(run, model):
     assert run.summary["lemma3"]["pairs_differing"] == n
     assert run.summary["lemma3"]["full_mdp_rows_equal_construction"]
     assert m == 2
+
+
+def test_report_words_lists_and_states_without_python_reprs(run):
+    """report.md is prose: "taubar = 4", states and stations as tuples, seeds as a list of
+    words, never a Python list ("taubar in [4]", "stations = [0, 3]") or bool."""
+    text = (run.out / "report.md").read_text()
+    found = re.search(r".{0,40}(?:\[\d+(?:, \d+)*\]|\b(?:True|False|None)\b).{0,20}", text)
+    assert not found, found.group()
+    taubar = run.summary["lemma3"]["differing_taubar_values"]
+    if run.summary["lemma3"]["pairs_differing"]:
+        said = " or ".join(str(t) for t in taubar)
+        assert f"type-1 loiters at taubar = {said}:" in text
 
 
 def test_monte_carlo_summary_is_reproducible(run, model):

@@ -320,7 +320,7 @@ def run(args: argparse.Namespace) -> int:
         f"problem charged {charged}; profiles in profile_time.png and profile_accuracy.png"
     )
     for note in result.notes:
-        log.warning("note: %s", note)
+        log.warning("%s", note)
     if result.not_installed:  # optional: said with --verbose only (their list is in notes.txt)
         log.info(
             "not installed here, so not compared (optional LP solvers; install commands in "

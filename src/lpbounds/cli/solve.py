@@ -26,7 +26,7 @@ from typing import Any
 from rich.table import Table
 
 from ..outputs import AtomicDirectory, run_metadata, write_text_atomic
-from ..text import fmt_counts, fmt_list, fmt_number, fmt_sci, fmt_seconds
+from ..text import fmt_bracket, fmt_counts, fmt_list, fmt_number, fmt_sci, fmt_seconds
 from ..tolerances import DP_RTOL
 from ._common import (
     add_model_argument,
@@ -109,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
         "value_min": float(v.min()),
         "value_mean": float(v.mean()),
         "value_max": float(v.max()),
+        # where the statistics of V* itself lie: the certified bracket of each
+        **certified_statistics(result.lower_values, result.upper_values),
     }
     console.print(_table(stats, mdp, result))
     if args.json:
@@ -126,6 +128,35 @@ METHOD_NAMES = {
     "pi": "policy iteration (pi)",
     "ipi": "inexact policy iteration (ipi)",
 }
+
+
+def certified_statistics(lower: Any, upper: Any) -> dict[str, list[float]]:
+    """The brackets on ``min V*``, ``mean V*`` and ``max V*`` from a certified bracket
+    ``lower <= V* <= upper`` (state by state): ``vstar_min``, ``vstar_mean``,
+    ``vstar_max``, each ``[lo, hi]``. The mean's ends are rounded outward (a sum in
+    floating point may be off by an ulp either way)."""
+    import math
+
+    import numpy as np
+
+    lo, hi = np.asarray(lower, dtype=np.float64), np.asarray(upper, dtype=np.float64)
+    n = lo.size
+    mean_lo = math.nextafter(math.fsum(lo.tolist()) / n, -math.inf)
+    mean_hi = math.nextafter(math.fsum(hi.tolist()) / n, math.inf)
+    return {
+        "vstar_min": [float(lo.min()), float(hi.min())],
+        "vstar_mean": [mean_lo, mean_hi],
+        "vstar_max": [float(lo.max()), float(hi.max())],
+    }
+
+
+def fmt_statistic(lo: float, hi: float) -> str:
+    """A number known to lie in ``[lo, hi]``, shown so that what it says is true: the
+    4-digit number both ends round to (so every value of the bracket rounds to it), else
+    the bracket itself rounded outward (``min [0, 5.9e-10]``, not ``min 2.937e-10`` for a
+    V* whose least value is 0)."""
+    one = fmt_number(lo)
+    return one if one == fmt_number(hi) else fmt_bracket(lo, hi)
 
 
 def _table(stats: dict[str, Any], mdp: Any, result: Any) -> Table:
@@ -148,9 +179,8 @@ def _table(stats: dict[str, Any], mdp: Any, result: Any) -> Table:
     )
     t.add_row("error bound", f"||V - V*|| <= {fmt_sci(stats['error_bound'])}")
     t.add_row(
-        "V*",
-        f"min {fmt_number(stats['value_min'])}, mean {fmt_number(stats['value_mean'])}, "
-        f"max {fmt_number(stats['value_max'])}",
+        "V* (certified)",
+        ", ".join(f"{k} {fmt_statistic(*stats[f'vstar_{k}'])}" for k in ("min", "mean", "max")),
     )
     counts = np.bincount(result.policy, minlength=mdp.n_actions)
     t.add_row(

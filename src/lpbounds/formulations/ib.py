@@ -29,10 +29,14 @@ __all__ = ["IB", "LLP"]
 class IB(RowsLP):
     r"""The iterated-Bellman lifted LP over partitions (eq. 20-22), ``L >= 1`` blocks.
 
-    .. math:: IB := \min \sum_{j=1}^L \bar c^T v_j \quad\text{s.t.}\quad
-       v_{j+1}(i) \ge R_u(x) + \lambda \sum_l p_l\, v_j(\bar f(x,u,Y_l))
-       \ (j = 1..L-1), \qquad
-       v_1(i) \ge R_u(x) + \lambda \sum_l p_l\, v_L(\bar f(x,u,Y_l)),
+    .. math::
+
+        \begin{array}{l}
+        IB := \min \sum_{j=1}^L \bar c^T v_j \quad\text{s.t.} \\
+        \qquad v_{j+1}(i) \ge R_u(x) + \lambda \sum_l p_l\, v_j(\bar f(x,u,Y_l))
+        \ (j = 1..L-1), \\
+        \qquad v_1(i) \ge R_u(x) + \lambda \sum_l p_l\, v_L(\bar f(x,u,Y_l)),
+        \end{array}
 
     for all ``x in S_i``, ``i``, ``u``. Theorem 2: every feasible ``(v_1, ..., v_L)`` has
     ``v_j >= v*`` (RLP's optimum) for every ``j``, so lifting with iterated Bellman
@@ -183,9 +187,13 @@ def _cyclic_rows(rows: BellmanRows, L: int) -> BellmanRows:
 class LLP(Formulation):
     r"""A lifted restricted LP of the form of eq. 18, with surplus variables as the lifting.
 
-    .. math:: LLP := \min \bar c^T v + d^T z \quad\text{s.t.}\quad
-       V(x) \ge R_u(x) + \lambda \sum_l p_l V(f(x,u,Y_l)),\quad V(x) = v(i)\ (x \in S_i),
-       \quad z \ge 0.
+    .. math::
+
+        \begin{array}{l}
+        LLP := \min \bar c^T v + d^T z \quad\text{s.t.} \\
+        \qquad V(x) \ge R_u(x) + \lambda \sum_l p_l V(f(x,u,Y_l)),\quad V(x) = v(i)\ (x \in S_i),
+        \quad z \ge 0.
+        \end{array}
 
     The paper leaves the lifting ``z`` generic. lpbounds makes it concrete: ``z`` has
     one entry per allowed (state, action) pair, the **surplus** of that pair's Bellman

@@ -1,8 +1,12 @@
 r"""The restricted LP under state aggregation (paper eq. 9, compact form eq. 10).
 
-.. math:: RLP := \min \sum_{i=1}^M \sum_{x \in S_i} c(x)\, v(i) \quad \text{s.t.}\quad
-          v(i) \ge R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))
-          \;\; \forall x \in S_i,\ i = 1..M,\ \forall u.
+.. math::
+
+    \begin{array}{l}
+    RLP := \min \sum_{i=1}^M \sum_{x \in S_i} c(x)\, v(i) \quad \text{s.t.} \\
+    \qquad v(i) \ge R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))
+    \;\; \forall x \in S_i,\ i = 1..M,\ \forall u.
+    \end{array}
 
 ``Phi v*`` is an upper bound on ``V*`` (every solution of the Bellman inequalities
 dominates ``V*``: the paper's lemma on iterated Bellman inequalities), and by Theorem 1 the

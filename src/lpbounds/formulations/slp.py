@@ -1,9 +1,13 @@
 r"""The surrogate LP of the restricted LP (paper eq. 12 / SLP1 in Appendix C).
 
-.. math:: SLP(\mu) := \min \bar c^T v \quad\text{s.t.}\quad
-          \sum_{x \in S_i} \mu_u^i(x)\, v(i) \;\ge\; \sum_{x \in S_i} \mu_u^i(x)
-          \Big[R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))\Big]
-          \quad \forall u,\ i = 1..M.
+.. math::
+
+    \begin{array}{l}
+    SLP(\mu) := \min \bar c^T v \quad\text{s.t.} \\
+    \qquad \sum_{x \in S_i} \mu_u^i(x)\, v(i) \ge \sum_{x \in S_i} \mu_u^i(x)
+    \Big[R_u(x) + \lambda \sum_{l=0}^m p_l\, v(\bar f(x, u, Y_l))\Big]
+    \quad \forall u,\ i.
+    \end{array}
 
 Each surrogate row is a non-negative combination of RLP's rows of ``(i, u)``, so every
 RLP-feasible ``v`` is SLP-feasible and ``SLP(mu) <= RLP`` (a relaxation). Dividing a row
@@ -11,9 +15,13 @@ with ``sum_x mu_u^i(x) > 0`` by that sum gives eq. SLPB: the Bellman row of the 
 MDP* of step 2 of Theorem 1's proof, with ``h_u^i(x) = mu_u^i(x) / sum_{x in S_i}
 mu_u^i(x)`` and
 
-.. math:: r_u(i) = \sum_{x \in S_i} h_u^i(x) R_u(x), \qquad
-          \tilde P_u(i, j) = \sum_{x \in S_i} h_u^i(x) \sum_{y \in S_j} P_u(x, y),
-          \qquad u \in U_i \iff \sum_{x \in S_i} \mu_u^i(x) > 0.
+.. math::
+
+    \begin{array}{l}
+    r_u(i) = \sum_{x \in S_i} h_u^i(x) R_u(x), \qquad
+    \tilde P_u(i, j) = \sum_{x \in S_i} h_u^i(x) \sum_{y \in S_j} P_u(x, y), \\
+    u \in U_i \iff \sum_{x \in S_i} \mu_u^i(x) > 0.
+    \end{array}
 
 So ``SLP(mu)`` is the exact LP of that reduced MDP; by Fact 1 of :mod:`lpbounds.rows`
 its optimum, for every ``c >= 0``, is the reduced MDP's value

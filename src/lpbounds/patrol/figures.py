@@ -411,6 +411,11 @@ def plot_vsub(
 
 
 # ---------------------------------------------------------------------- Figure 7
+#: How a policy's key in the Monte Carlo's runs reads in a legend: the report's names
+#: (``pi*`` and ``pi_s`` there, as mathtext here), not the keys of the code
+POLICY_LABELS = {"pi_star": r"$\pi^*$", "pi_s": r"$\pi_s$"}
+
+
 def plot_histograms(
     delays: dict[str, np.ndarray], loiters: dict[str, np.ndarray], path: str | Path
 ) -> Path:
@@ -429,7 +434,7 @@ def plot_histograms(
             h,
             width,
             color=colors[k % 4],
-            label=f"{name} (n = {v.size})",
+            label=f"{POLICY_LABELS.get(name, name)} (n = {v.size})",
         )
     ax.set_xlabel("service delay (time from alert to first loiter, uncapped)")
     ax.set_ylabel("fraction of serviced alerts")
@@ -440,7 +445,13 @@ def plot_histograms(
     for k, name in enumerate(names):
         v = loiters[name]
         h = np.bincount(v, minlength=topl + 1)[: topl + 1] / max(1, v.size)
-        ax2.bar(lb + (k - (len(names) - 1) / 2) * width, h, width, color=colors[k % 4], label=name)
+        ax2.bar(
+            lb + (k - (len(names) - 1) / 2) * width,
+            h,
+            width,
+            color=colors[k % 4],
+            label=POLICY_LABELS.get(name, name),
+        )
     ax2.set_xlabel("number of loiters per serviced alert")
     ax2.set_ylabel("fraction of serviced alerts")
     ax2.set_xticks(lb)

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ..outputs import metadata_lines
+from ..text import fmt_bool, fmt_list, fmt_tuple
 from .summary import ClaimsSummary, Inequality, SandwichSummary, Summary
 
 __all__ = ["markdown_table", "monte_carlo_table", "write_report"]
@@ -103,9 +104,10 @@ def _header(s: Summary) -> list[str]:
     pr = s.params
     return [
         f"# Reproduction of Park et al., Sections 4-6, on `{s.instance}`\n",
-        f"Parameters: N = {pr['N']}, stations = {pr['stations']}, D = {pr['D']}, "
+        f"Parameters: N = {pr['N']}, stations = {fmt_tuple(pr['stations'])}, D = {pr['D']}, "
         f"Gamma = {pr['Gamma']}, rho = {pr['rho']}, lambda = {pr['discount']}, "
-        f"alpha = {pr['alpha']:.6g}, allow_empty_loiter = {pr['allow_empty_loiter']}; "
+        f"alpha = {pr['alpha']:.6g}, "
+        f"allow_empty_loiter = {fmt_bool(pr['allow_empty_loiter'], 'true', 'false')}; "
         f"total {s.seconds_total:.1f} s.\n",
         "Run with:\n",
         *[f"- {line}" for line in metadata_lines(s.machine)],
@@ -209,7 +211,8 @@ def _section_bounds(s: Summary) -> list[str]:
         f"Lemma 3: |T(i,u)| from the partition-level construction equals the paper's formula "
         f"on {lem.pairs - lem.pairs_differing:,} of {lem.pairs:,} allowed "
         f"(partition, action) pairs; it differs on {lem.pairs_differing} pairs, all of "
-        f"them type-1 loiters with taubar in {lem.differing_taubar_values}: there the cap "
+        f"them type-1 loiters at taubar = {fmt_list(lem.differing_taubar_values, 'or')}: "
+        "there the cap "
         f"at Gamma merges the next maximum delays Gamma and Gamma + 1, so |T| = Gamma - 1, "
         f"not taubar = Gamma." + counted + "\n",
     ]
@@ -281,8 +284,9 @@ def _claims_explanation(cl: ClaimsSummary) -> list[str]:
                 ["x2 (l, w, d, tau)", "station j", "V*(x2)", "V*(x1 = x2 + e_j)", "excess"],
                 [
                     [
-                        f"({e['x2']['l']}, {e['x2']['w']}, {e['x2']['d']}, "
-                        f"{list(e['x2']['tau'].values())})",
+                        fmt_tuple(
+                            [e["x2"]["l"], e["x2"]["w"], e["x2"]["d"], *e["x2"]["tau"].values()]
+                        ),
                         e["station"],
                         e["vstar_x2"],
                         e["vstar_x1"],
@@ -380,7 +384,7 @@ def _section_monte_carlo(s: Summary, files: dict[str, Path], out: Path) -> list[
     )
     return [
         "## 5. Monte Carlo (Table 1, Figure 7)\n",
-        f"Seeds {mc.seeds}, {mc.n_steps_per_seed:,} steps each, the same alert "
+        f"Seeds {fmt_list(mc.seeds, 'and')}, {mc.n_steps_per_seed:,} steps each, the same alert "
         f"sequence for both policies; statistics pooled over all serviced alerts.\n",
         monte_carlo_table(s) + "\n",
         "**Conventions.** An alert arriving with the disturbance of step t shows as "
@@ -445,4 +449,4 @@ def _inequality_row(label: str, check: Inequality) -> list[Any]:
 
 
 def _st(d: dict[str, Any]) -> str:
-    return f"l={d['l']} w={d['w']} d={d['d']} tau={list(d['tau'].values())}"
+    return f"l={d['l']} w={d['w']} d={d['d']} tau={fmt_tuple(d['tau'].values())}"

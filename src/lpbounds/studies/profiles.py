@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -43,6 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = [
+    "coinciding_profiles",
     "new_figure",
     "performance_profile",
     "performance_ratios",
@@ -180,6 +181,38 @@ def performance_profile(table: pd.DataFrame, taus: Sequence[float] | None = None
     return out
 
 
+def coinciding_profiles(prof: pd.DataFrame) -> dict[str, list[str]]:
+    """Solvers whose profile curves are the same step function, by first member.
+
+    Two columns of :func:`performance_profile` coincide when they are equal at every
+    breakpoint (the profile is constant between breakpoints): drawn one over the other,
+    only the last would show. Returns ``{first: [others, ...]}`` for each group of two or
+    more, in the columns' order.
+    """
+    groups: dict[str, list[str]] = {}
+    seen: dict[bytes, str] = {}
+    for col in prof.columns:
+        key = np.asarray(prof[col], dtype=np.float64).tobytes()
+        if key in seen:
+            groups.setdefault(seen[key], []).append(str(col))
+        else:
+            seen[key] = str(col)
+    return groups
+
+
+#: dash patterns of the second, third, ... of coinciding curves (the first is solid and
+#: widest, each next one narrower and dashed over it: every colour shows along the curve)
+_COINCIDE_DASHES = [(0, (4.0, 3.0)), (2, (2.0, 4.0)), (0, (1.0, 2.0))]
+
+
+def _wrap(label: str, width: int = 48) -> str:
+    """A legend label on lines of at most ``width`` characters (the legend sits beside the
+    axes: one long label would squeeze them)."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(label, width)) or label
+
+
 def plot_performance_profile(
     table: pd.DataFrame,
     path: str | Path,
@@ -192,7 +225,11 @@ def plot_performance_profile(
 
     Each curve ends at the fraction of problems its solver solved; a solver that solved
     nothing lies on zero (drawn, not dropped). ``labels`` maps column names to legend
-    text (for example with the backend).
+    text (for example with the backend). Curves that coincide
+    (:func:`coinciding_profiles`: SCIPY is HiGHS inside, and often gives HIGHS's own
+    curve) are drawn as stacked lines, the first widest and solid, the others narrower
+    and dashed on top of it, so that each one shows; their legend entries say which
+    curve they share.
     """
     prof = performance_profile(table)
     ratios = performance_ratios(table).to_numpy()
@@ -202,18 +239,31 @@ def plot_performance_profile(
     fig = new_figure((9.5, 4.5))
     ax = fig.subplots()
     styles = ["-", "--", "-.", ":"]
+    same = coinciding_profiles(prof)
+    member = {o: (first, k + 1) for first, others in same.items() for k, o in enumerate(others)}
+    name = {str(c): (labels or {}).get(str(c), str(c)) for c in prof.columns}
     for k, col in enumerate(prof.columns):
+        col = str(col)
         y = np.concatenate([prof[col].to_numpy(), [prof[col].to_numpy()[-1]]])
-        label = (labels or {}).get(str(col), str(col))
-        ax.step(taus, y, where="post", label=label, ls=styles[(k // 10) % 4], lw=1.6)
+        label, lw = name[col], 1.6
+        ls: Any = styles[(k // 10) % 4]  # a name, or an (offset, dashes) pattern below
+        if col in same:  # the first of coinciding curves: widest, under the others
+            lw = 1.6 + 1.6 * len(same[col])
+            label += f" (same curve as {', '.join(same[col])})"
+        elif col in member:
+            first, j = member[col]
+            ls = _COINCIDE_DASHES[min(j, len(_COINCIDE_DASHES)) - 1]
+            lw = max(1.2, 1.6 + 1.6 * (len(same[first]) - j))
+            label += f" (same curve as {first})"
+        ax.step(taus, y, where="post", label=_wrap(label), ls=ls, lw=lw)
     ax.set_xscale("log", base=2)
     ax.set(
         xlim=(1.0, top),
         ylim=(-0.02, 1.02),
         xlabel=f"tau: within this factor of the best {measure}",
         ylabel="fraction of problems",
-        title=title,
     )
+    ax.set_title(title, loc="left")  # from the axes' left edge: never cut off on the left
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
     fig.text(

@@ -230,8 +230,10 @@ def plot_profiles(frame: pd.DataFrame, out: str | Path) -> dict[str, Path]:
 def plot_study(frame: pd.DataFrame, path: str | Path) -> Path:
     """Save the summary figure: solve time vs LP size per solver; certified error vs time.
 
-    Solves that returned no point are drawn at their wall time as red crosses (left) and
-    on the top edge (right), not dropped."""
+    Left, a point per problem (the median over its repeats) and per solver a line through
+    the median at each size, so problems of one size show as points and the line never
+    runs vertically through them. Solves that returned no point are drawn at their wall
+    time as red crosses (left) and on the top edge (right), not dropped."""
     from matplotlib import colormaps
     from matplotlib.lines import Line2D
 
@@ -245,8 +247,13 @@ def plot_study(frame: pd.DataFrame, path: str | Path) -> Path:
     tab10 = colormaps["tab10"]
     colors = {c: tab10(i % 10) for i, c in enumerate(configs)}
     for (cfg, form), grp in ok.groupby(["config", "formulation"]):
-        med = grp.groupby("n_vars", as_index=False)["solve_seconds"].median()
-        ax1.plot(med["n_vars"], med["solve_seconds"], marker=markers[form], color=colors[cfg])
+        # a point per problem (median of its repeats); the line through the median at
+        # each size, one y per x: problems of the same size show as points, not as a
+        # vertical stroke of the line through them
+        per = grp.groupby(["instance", "n_vars"], as_index=False)["solve_seconds"].median()
+        ax1.scatter(per["n_vars"], per["solve_seconds"], marker=markers[form], color=colors[cfg])
+        med = per.groupby("n_vars", as_index=False)["solve_seconds"].median()
+        ax1.plot(med["n_vars"], med["solve_seconds"], color=colors[cfg], lw=1.2)
         total = grp["compile_seconds"] + grp["solve_seconds"]
         err = np.maximum(grp["certified_error"].astype(float), 1e-16)
         ax2.scatter(total, err, marker=markers[form], color=colors[cfg])
@@ -255,14 +262,15 @@ def plot_study(frame: pd.DataFrame, path: str | Path) -> Path:
         top = max(1.0, float(ok["certified_error"].max()) * 10 if len(ok) else 1.0)
         ax2.scatter(failed["wall_seconds"], np.full(len(failed), top), marker="x", color="red")
     ax1.set(xscale="log", yscale="log", xlabel="LP variables", title="solve time vs size")
-    ax1.set_ylabel("solve time (s, median)")
+    ax1.set_ylabel("solve time (s): each problem, median of repeats;\nline: median per size")
     ax2.set(xscale="log", yscale="log", xlabel="compile + solve time (s)", title="accuracy vs time")
     ax2.set_ylabel("certified error bound (floored at 1e-16)")
     for ax in (ax1, ax2):
         ax.grid(True, which="both", alpha=0.3)
     keys = [Line2D([], [], color=colors[c], marker="o", ls="-", label=c) for c in configs]
     keys += [Line2D([], [], color="k", marker=m, ls="", label=f) for f, m in markers.items()]
-    keys.append(Line2D([], [], color="red", marker="x", ls="", label="no point returned"))
+    if len(failed):  # a legend entry only for what is drawn
+        keys.append(Line2D([], [], color="red", marker="x", ls="", label="no point returned"))
     fig.legend(handles=keys, loc="center right", fontsize=8, frameon=False,
                title="solver (colour) / formulation (marker)", title_fontsize=8)  # fmt: skip
     fig.tight_layout(rect=(0, 0, 0.8, 1))

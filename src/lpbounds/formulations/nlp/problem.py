@@ -1,8 +1,12 @@
 r"""The disjunctive lower-bound program NLP (paper Section 3.3, eq. 23-25).
 
-.. math:: NLP := \min \bar c^T w \quad\text{s.t.}\quad
-          w(i) \ge \min_{x \in S_i} \Big\{ R_u(x) + \lambda \sum_{l=0}^m p_l\,
-          w(\bar f(x, u, Y_l)) \Big\} \quad \forall u,\ i = 1..M.   \qquad (25)
+.. math::
+
+    \begin{array}{l}
+    NLP := \min \bar c^T w \quad\text{s.t.} \\
+    \qquad w(i) \ge \min_{x \in S_i} \Big\{ R_u(x) + \lambda \sum_{l=0}^m p_l\,
+    w(\bar f(x, u, Y_l)) \Big\} \quad \forall u,\ i = 1..M.   \qquad (25)
+    \end{array}
 
 Its optimum ``w*`` satisfies ``w*(i) <= min_{x in S_i} V*(x)`` (the paper: ``w-bar(i) =
 min_{S_i} V*`` is feasible, eq. 24). The minimum over ``x in S_i`` only ranges over the
@@ -828,10 +832,15 @@ def _mip_dual_bound(stats: Any) -> float:
 class NLPMILP:
     r"""The disjunctive program of eq. 25 as a cvxpy mixed-integer LP (big-M; a model class).
 
-    .. math:: \min \bar c^T w \quad\text{s.t.}\quad
-       a_t^T w \ge b_t - M_t (1 - z_t)\ \ (t \text{ a term of a multi-term } (i, u)),\quad
-       \sum_{t \in (i, u)} z_t = 1,\quad z_t \in \{0, 1\},\quad
-       a_t^T w \ge b_t\ \ (\text{single-term } (i, u)),\quad lo \le w \le hi,
+    .. math::
+
+        \begin{array}{l}
+        \min \bar c^T w \quad\text{s.t.} \\
+        \qquad a_t^T w \ge b_t - M_t (1 - z_t)\ \ (t \text{ a term of a multi-term } (i, u)), \\
+        \qquad \sum_{t \in (i, u)} z_t = 1,\quad z_t \in \{0, 1\},\quad
+        a_t^T w \ge b_t\ \ (\text{single-term } (i, u)), \\
+        \qquad lo \le w \le hi,
+        \end{array}
 
     with term ``t`` of disjunction ``(i, u)`` the row ``w(i) >= rho_t + lambda sum_l
     p_{t,l} w(k_{t,l})`` (``a_t = e_i - lambda P_t``, ``b_t = rho_t``: one distinct successor
