@@ -346,17 +346,52 @@ def _cli(*args: str) -> list[str]:
     return [sys.executable, "-c", code, *args]
 
 
+#: A conjecture that holds and, while the file named by LPBOUNDS_TEST_GATE exists, waits
+#: at every instance after the first two (the first batch): the run it is part of cannot
+#: finish before the test interrupts it, however loaded the machine is.
+GATE = """
+import os, time
+from lpbounds.studies.claims import Conjecture
+
+
+def wait_at_the_gate(trial):
+    gate = os.environ.get("LPBOUNDS_TEST_GATE", "")
+    if trial.instance.name not in FIRST and gate:
+        while os.path.exists(gate):
+            time.sleep(0.01)
+    return True
+
+
+FIRST = set()
+GATED = Conjecture("holds, waiting at the gate", wait_at_the_gate, uses_solver=False)
+"""
+
+
 def test_an_interrupted_campaign_resumes_to_the_same_records(tmp_path):
     args = [
         "verify", "--random", "12", "--seed", "2", "--families", "garnet", "masked-garnet",
         "--claims", "theorem1", "--solvers", "HIGHS", "--batch-size", "2",
     ]  # fmt: skip
     whole = tmp_path / "whole"
+    names = [
+        f"{fam}:{seed}" for _, fam, seed in cp.instance_plan(2, 2, ["garnet", "masked-garnet"])
+    ]
+    gate_file = tmp_path / "gate.py"
+    gate_file.write_text(GATE.replace("FIRST = set()", f"FIRST = {set(names)!r}"))
+    args.insert(args.index("theorem1") + 1, f"{gate_file}:GATED")
     assert main([*args, "--out", str(whole), "-q"]) == 0
     out = tmp_path / "cut"
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    gate = tmp_path / "closed"
+    gate.touch()
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "LPBOUNDS_TEST_GATE": str(gate)}
     proc = subprocess.Popen(
-        _cli(*args, "--out", str(out)), stderr=subprocess.PIPE, text=True, env=env
+        _cli(*args, "--out", str(out)),
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        # SIGINT as in a terminal, even when the suite runs as a background job (which
+        # starts its children with SIGINT ignored: the campaign then ran to its end)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline and proc.poll() is None:
