@@ -30,7 +30,7 @@ from lpbounds.rows import BellmanRows, PolicySweeps, PostDecisionRows, SweepOper
 from lpbounds.status import Status
 
 SRC = Path(dp.__file__).resolve().parents[1]
-#: a small patrol (numpy array path) and one above SMALL_READS (compiled array path)
+#: a small patrol (one range per C sweep) and one whose sweeps split over the threads
 PARAMS = {
     "small": PatrolParams(N=5, stations=(0, 2), D=2, Gamma=6),
     "compiled": PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=11),

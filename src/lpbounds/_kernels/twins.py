@@ -1,20 +1,21 @@
-"""Plain-numpy twins of the compiled kernels of :mod:`lpbounds._kernels.compiled`,
-:mod:`lpbounds._kernels.aggregate` and :mod:`lpbounds._kernels.native`, for small models.
+"""Plain-numpy twins of the C kernels of :mod:`lpbounds._kernels.ckernels` and
+:mod:`lpbounds._kernels.native`: the reference the tests compare them with.
 
-Each function has the name, arguments and outputs of its compiled twin and the same
+Each function has the name, arguments and outputs of its C twin and the same
 arithmetic: a row's value is ``acc = 0.0; acc += probs[r, l] * v[targets[r, l]]`` for
 ``l = 0, 1, ...`` (one multiply and one add per outcome, in outcome order, no fused
 multiply-add), then ``reward[r] + discount * acc``; a max (min) keeps the *first* row or
 action that attains it and never picks a NaN; the residual extremes ignore NaNs. So the
-two paths return the same numbers (up to the sign of a zero residual extreme), which
-``tests/test_fast_paths.py`` checks bit for bit on random models with action masks, and
-the rounding analysis of :mod:`lpbounds.certification.certificate` and
-:func:`lpbounds.tolerances.error_bound` covers both.
+two return the same numbers (up to the sign of a zero residual extreme), which
+``tests/test_ckernels.py``, ``tests/test_native.py`` and ``tests/test_fast_paths.py``
+check bit for bit on random models with action masks (kernel by kernel, and whole solves
+with the library running on the twins); the rounding analysis of
+:mod:`lpbounds.certification.certificate` and :func:`lpbounds.tolerances.error_bound`
+covers both.
 
 Loops run over the (few) outcomes or actions, never over states or rows: a sweep costs a
-few numpy calls per outcome, which on a model of a few thousand rows is far less than
-the seconds a first compile takes (:mod:`lpbounds._kernels.dispatch` picks the path by size).
-``nchunks`` arguments only balance the compiled kernels' threads and are ignored here.
+few numpy calls per outcome. The library itself always runs the C kernels (faster at
+every size, :mod:`lpbounds._kernels.dispatch`); these are written to be read and checked.
 """
 
 from __future__ import annotations
@@ -68,7 +69,9 @@ def q_values(reward, targets, probs, discount, v, out):
 
 
 def bellman_maxmin(indptr, action, reward, targets, probs, discount, v, out, arg):
-    """Stochastic-game operator (see :func:`lpbounds._kernels.compiled.bellman_maxmin`)."""
+    """Stochastic-game operator: ``out[i]`` the max over the actions of owner ``i``'s rows
+    (sorted by action) of the min of ``q_r`` over that action's rows; ``arg[i]`` the
+    minimising row of the first maximising action."""
     n_rows = targets.shape[0]
     q = _q(reward, targets, probs, discount, v)
     starts = np.zeros(n_rows, dtype=bool)
@@ -157,7 +160,7 @@ def ps_fill(succ, allowed, post_id, outcomes, first):
     outcomes[k[allowed]] = succ[allowed]
 
 
-def ps_verify(succ, first, outcomes, nchunks):
+def ps_verify(succ, first, outcomes):
     """1 if some allowed pair's tuple differs from its ``outcomes`` row, else 0."""
     ok = first >= 0
     return int(not np.array_equal(outcomes[first[ok]], succ[ok]))
@@ -192,13 +195,13 @@ def _ps_policy(q_sel: np.ndarray, v: np.ndarray, out: np.ndarray) -> tuple[float
     return _extremes(out - v)
 
 
-def ps_max_stats(first, reward, w, discount, v, out, arg, nchunks):
+def ps_max_stats(first, reward, w, discount, v, out, arg):
     """``out[x] = max_u reward[x, u] + discount w[first[x, u]]``, the first maximising
     action in ``arg``; returns the extremes of ``out - v``."""
     return _ps_max(_ps_q(first, reward, w, discount), v, out, arg)
 
 
-def ps_policy_stats(first, reward, act, w, discount, v, out, nchunks):
+def ps_policy_stats(first, reward, act, w, discount, v, out):
     """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``."""
     x = np.arange(first.shape[0])
     return _ps_policy(reward[x, act] + discount * w[first[x, act]], v, out)
@@ -211,23 +214,28 @@ def ps_rows(allowed, row_start, act, out):
     out[:] = row_start + before[np.arange(act.shape[0]), act]
 
 
-def reward_codes(reward, bits, max_codes, codes, table):
-    """Dictionary-encode ``reward``: ``table[codes] == reward`` bit for bit; the number of
-    distinct values, or -1 if there are more than ``max_codes``."""
-    uniq, inv = np.unique(bits.reshape(-1), return_inverse=True)
+def reward_codes(reward, max_codes, codes, table):
+    """Dictionary-encode ``reward``: ``table[codes] == reward`` bit for bit, the codes
+    numbering the distinct values (by their bits) in order of first appearance; the number
+    of distinct values, or -1 if there are more than ``max_codes``."""
+    bits = np.ascontiguousarray(reward, dtype=np.float64).view(np.int64).reshape(-1)
+    uniq, first, inv = np.unique(bits, return_index=True, return_inverse=True)
     if uniq.size > max_codes:
         return -1
-    codes[...] = inv.reshape(codes.shape)
-    table[: uniq.size] = uniq.view(np.float64)
+    by_first = np.argsort(first)  # code c is the c-th distinct value met
+    rank = np.empty(uniq.size, dtype=np.int64)
+    rank[by_first] = np.arange(uniq.size)
+    codes[...] = rank[inv.reshape(-1)].reshape(codes.shape)
+    table[: uniq.size] = uniq[by_first].view(np.float64)
     return int(uniq.size)
 
 
-def ps_max_stats_coded(first, codes, table, w, discount, v, out, arg, nchunks):
+def ps_max_stats_coded(first, codes, table, w, discount, v, out, arg):
     """:func:`ps_max_stats` with rewards ``table[codes[x, u]]``."""
     return _ps_max(_ps_q(first, table[codes], w, discount), v, out, arg)
 
 
-def ps_policy_stats_coded(first, codes, table, act, w, discount, v, out, nchunks):
+def ps_policy_stats_coded(first, codes, table, act, w, discount, v, out):
     """:func:`ps_policy_stats` with rewards ``table[codes[x, u]]``."""
     x = np.arange(first.shape[0])
     return _ps_policy(table[codes[x, act]] + discount * w[first[x, act]], v, out)
@@ -235,11 +243,12 @@ def ps_policy_stats_coded(first, codes, table, act, w, discount, v, out, nchunks
 
 # ---------------------------------------------------------------------- aggregation
 def canonical_rows(
-    labels, state, action, succ, probs, n_actions, out_owner, out_t, out_p, out_oa, out_key, nchunks
+    labels, state, action, succ, probs, n_actions, out_owner, out_t, out_p, out_oa, out_key
 ):
-    """Aggregated, canonical rows, their ``owner * A + action`` and hash (see
-    :mod:`lpbounds._kernels.aggregate`): targets mapped to partitions and stably sorted, equal
-    targets merged (probabilities summed in sorted order), zero probabilities dropped."""
+    """Aggregated, canonical rows, their ``owner * A + action`` and hash: targets mapped to
+    partitions and stably sorted, equal targets merged (probabilities summed in sorted
+    order), zero probabilities dropped, each row padded with its first target at
+    probability 0 (see :meth:`lpbounds.rows.BellmanRows.aggregate`)."""
     n_rows, n_out = succ.shape
     t = labels[succ]
     perm = np.argsort(t, axis=1, kind="stable")
@@ -265,7 +274,7 @@ def canonical_rows(
     out_p[pad] = 0.0
     o = labels[state]
     out_owner[:] = o
-    scale = 9007199254740992.0  # 2**53, as in the compiled kernel
+    scale = 9007199254740992.0  # 2**53, as in the C kernel
     with np.errstate(over="ignore"):
         h = np.full(n_rows, _SEED, dtype=np.uint64)
         for a in range(n_out):
@@ -277,7 +286,7 @@ def canonical_rows(
     out_key[:] = h
 
 
-def mark_groups(order, oa, key, t, pbits, new, nchunks):
+def mark_groups(order, oa, key, t, pbits, new):
     """``new[i]``: sorted row ``i`` starts a group; True if two different rows of one bucket
     share a hash (a collision)."""
     n = order.shape[0]
@@ -316,7 +325,13 @@ def merge_groups(
     sizes = np.diff(starts)
     group[order] = np.repeat(np.arange(n_groups), sizes)
     reduce = np.maximum if use_max else np.minimum
-    red[:] = reduce.reduceat(reward[order], starts[:-1])
+    vals = reward[order]
+    extreme = reduce.reduceat(vals, starts[:-1])
+    # the first row attaining it (-0.0 and 0.0 tie: the first's sign, as the C kernel
+    # keeps; numpy's maximum may return either)
+    hit = vals == np.repeat(extreme, sizes)
+    n = vals.shape[0]
+    red[:] = vals[np.minimum.reduceat(np.where(hit, np.arange(n), n), starts[:-1])]
     first = order[starts[:-1]]
     g_owner[:] = owner[first]
     g_action[:] = action[first]
