@@ -487,6 +487,10 @@ def test_wrong_dtypes_and_shapes_raise_typed_errors():
         C.q_values(reward[:-1], targets, probs, 0.9, v, out[:-1])
     with pytest.raises(TypeError, match=r"out: not C-contiguous"):
         C.q_values(reward, targets, probs, 0.9, v, np.empty(2 * reward.size)[::2])
+    succ, allowed = post_decision(rng, 6, 2, 2, np.int32, 1.0)
+    with pytest.raises(TypeError, match=r"first: expected a 2-D integer array"):
+        C.ps_fill(succ, allowed, np.arange(6, dtype=np.int32), np.empty((6, 2), np.int32),
+                  np.empty((6, 2), np.int64))  # fmt: skip
     with pytest.raises(ValueError, match=r"max_codes: more codes than the dtype"):
         C.reward_codes(np.zeros((3, 2)), 257, np.empty((3, 2), np.uint8), np.empty(257))
     with pytest.raises(TypeError, match=r"codes: expected a 2-D integer array"):

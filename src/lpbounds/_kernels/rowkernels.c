@@ -163,8 +163,24 @@ static LPB_INLINE void st(char *p, Py_ssize_t size, Py_ssize_t i, int64_t x) {
     }
 }
 
-#define LD(B, I) ld(DATA(B), (B).b.itemsize, (B).kind == K_I, (I))
-#define ST(B, I, X) st(DATA(B), (B).b.itemsize, (I), (X))
+/* An integer buffer as the loops read it: held in locals, which no store can alias (a
+ * store through a uint8 pointer may alias anything in memory, a Buf included). */
+typedef struct {
+    char *p;
+    Py_ssize_t size;
+    int sgn;
+} Ix;
+
+static Ix ix(const Buf *b) {
+    Ix x;
+    x.p = (char *)b->b.buf;
+    x.size = b->b.itemsize;
+    x.sgn = b->kind == K_I;
+    return x;
+}
+
+#define LD(X, I) ld((X).p, (X).size, (X).sgn, (I))
+#define ST(X, I, V) st((X).p, (X).size, (I), (V))
 
 /* ------------------------------------------------------------------------------ errors */
 
@@ -215,6 +231,35 @@ static PyObject *raise_bad(const Bad *e) {
     return NULL;
 }
 
+/* One call's buffers and the first bad entry its range met. */
+typedef struct {
+    Buf b[13];
+    Bad e;
+} Call;
+
+static void call_init(Call *c) {
+    memset(c, 0, sizeof *c);
+    c->e.type = NULL;
+}
+
+/* The call's result: its buffers released; NULL with the bad entry raised if the range met
+ * one (res is then dropped). */
+static PyObject *call_end(Call *c, PyObject *res) {
+    if (c->e.type) {
+        Py_XDECREF(res);
+        res = NULL;
+        if (!PyErr_Occurred())
+            raise_bad(&c->e);
+    }
+    release(c->b, (int)(sizeof c->b / sizeof c->b[0]));
+    return res;
+}
+
+static PyObject *none(void) {
+    Py_INCREF(Py_None);
+    return Py_None;
+}
+
 /* ------------------------------------------------------------------------------ rows */
 
 /* A row system as the row loops read it: reward (R,), targets (R, L) int32 / int64,
@@ -224,6 +269,7 @@ typedef struct {
     const char *targets;
     const char *probs;
     Py_ssize_t ps0, ps1, L, R;
+    int t64;
     double lam;
     const double *v;
     Py_ssize_t nv;
@@ -246,6 +292,7 @@ static int get_rows(PyObject *reward, PyObject *targets, PyObject *probs, PyObje
     rw->ps1 = b[2].b.strides[1];
     rw->L = SHAPE(b[1], 1);
     rw->R = R;
+    rw->t64 = b[1].b.itemsize == 8;
     rw->lam = lam;
     rw->v = (const double *)b[3].b.buf;
     rw->nv = SHAPE(b[3], 0);
@@ -270,7 +317,14 @@ static int get_rows(PyObject *reward, PyObject *targets, PyObject *probs, PyObje
 DEF_Q_ROW(i32, int32_t)
 DEF_Q_ROW(i64, int64_t)
 
-#define Q_ROW(T64, RW, R, Q, E) ((T64) ? q_row_i64(RW, R, Q, E) : q_row_i32(RW, R, Q, E))
+#define Q_ROW(RW, R, Q, E) ((RW)->t64 ? q_row_i64(RW, R, Q, E) : q_row_i32(RW, R, Q, E))
+
+static int q_range(const Rows *rw, double *out, Py_ssize_t start, Py_ssize_t end, Bad *e) {
+    for (Py_ssize_t r = start; r < end; r++)
+        if (Q_ROW(rw, r, &out[r], e))
+            return -1;
+    return 0;
+}
 
 PyDoc_STRVAR(q_values_doc,
              "q_values(reward, targets, probs, discount, v, out, start, end)\n\n"
@@ -283,44 +337,25 @@ static PyObject *q_values(PyObject *self, PyObject *args) {
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOdOOnn", &o_rew, &o_t, &o_p, &lam, &o_v, &o_out, &start, &end))
         return NULL;
-    Buf b[5];
-    memset(b, 0, sizeof b);
+    Call c;
+    call_init(&c);
     Rows rw;
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
-    if (get_rows(o_rew, o_t, o_p, o_v, lam, b, &rw) || get(o_out, &b[4], "out", 1, K_F, 8, 1, 0) ||
-        need(SHAPE(b[4], 0) == rw.R, "out needs one entry per row") ||
+    if (get_rows(o_rew, o_t, o_p, o_v, lam, c.b, &rw) ||
+        get(o_out, &c.b[4], "out", 1, K_F, 8, 1, 0) ||
+        need(SHAPE(c.b[4], 0) == rw.R, "out needs one entry per row") ||
         check_range(start, end, rw.R))
-        goto done;
-    int t64 = b[1].b.itemsize == 8;
-    double *out = (double *)b[4].b.buf;
+        return call_end(&c, NULL);
+    int failed;
     Py_BEGIN_ALLOW_THREADS
-    for (Py_ssize_t r = start; r < end; r++)
-        if (Q_ROW(t64, &rw, r, &out[r], &e))
-            break;
+    failed = q_range(&rw, (double *)c.b[4].b.buf, start, end, &c.e);
     Py_END_ALLOW_THREADS
-    if (e.type)
-        goto done;
-    res = Py_None;
-    Py_INCREF(res);
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 5);
-    return res;
+    return call_end(&c, failed ? NULL : none());
 }
-
-PyDoc_STRVAR(bellman_maxmin_doc,
-             "bellman_maxmin(indptr, action, reward, targets, probs, discount, v, out, arg, "
-             "start, end)\n\nThe stochastic-game operator for owners start <= i < end: "
-             "out[i] = max over the actions of owner i's rows (sorted by action) of the min of "
-             "q_r over that action's rows; arg[i] the minimising row of the first maximising "
-             "action. Releases the GIL.");
 
 #define INDPTR_WHY "is not an offset of rows: indptr must be non-decreasing within [0, rows]"
 
-static int maxmin_range(const Rows *rw, int t64, const int64_t *indptr, const int32_t *action,
+/* owners [start, end): the game operator (see bellman_maxmin_doc) */
+static int maxmin_range(const Rows *rw, const int64_t *indptr, const int32_t *action,
                         double *out, int64_t *arg, Py_ssize_t start, Py_ssize_t end, Bad *e) {
     for (Py_ssize_t i = start; i < end; i++) {
         int64_t r = indptr[i], stop = indptr[i + 1];
@@ -336,7 +371,7 @@ static int maxmin_range(const Rows *rw, int t64, const int64_t *indptr, const in
             int64_t low_r = r;
             while (r < stop && action[r] == a) {
                 double q;
-                if (Q_ROW(t64, rw, (Py_ssize_t)r, &q, e))
+                if (Q_ROW(rw, (Py_ssize_t)r, &q, e))
                     return -1;
                 if (q < low) {
                     low = q;
@@ -355,6 +390,13 @@ static int maxmin_range(const Rows *rw, int t64, const int64_t *indptr, const in
     return 0;
 }
 
+PyDoc_STRVAR(bellman_maxmin_doc,
+             "bellman_maxmin(indptr, action, reward, targets, probs, discount, v, out, arg, "
+             "start, end)\n\nThe stochastic-game operator for owners start <= i < end: "
+             "out[i] = max over the actions of owner i's rows (sorted by action) of the min of "
+             "q_r over that action's rows; arg[i] the minimising row of the first maximising "
+             "action. Releases the GIL.");
+
 static PyObject *bellman_maxmin(PyObject *self, PyObject *args) {
     PyObject *o_ip, *o_act, *o_rew, *o_t, *o_p, *o_v, *o_out, *o_arg;
     double lam;
@@ -362,46 +404,75 @@ static PyObject *bellman_maxmin(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "OOOOOdOOOnn", &o_ip, &o_act, &o_rew, &o_t, &o_p, &lam, &o_v,
                           &o_out, &o_arg, &start, &end))
         return NULL;
-    Buf b[8];
-    memset(b, 0, sizeof b);
+    Call c;
+    call_init(&c);
     Rows rw;
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
-    if (get_rows(o_rew, o_t, o_p, o_v, lam, b, &rw) ||
-        get(o_ip, &b[4], "indptr", 1, K_I, 8, 0, 0) ||
-        get(o_act, &b[5], "action", 1, K_I, 4, 0, 0) ||
-        get(o_out, &b[6], "out", 1, K_F, 8, 1, 0) || get(o_arg, &b[7], "arg", 1, K_I, 8, 1, 0))
-        goto done;
-    Py_ssize_t n = SHAPE(b[4], 0) - 1;
+    if (get_rows(o_rew, o_t, o_p, o_v, lam, c.b, &rw) ||
+        get(o_ip, &c.b[4], "indptr", 1, K_I, 8, 0, 0) ||
+        get(o_act, &c.b[5], "action", 1, K_I, 4, 0, 0) ||
+        get(o_out, &c.b[6], "out", 1, K_F, 8, 1, 0) ||
+        get(o_arg, &c.b[7], "arg", 1, K_I, 8, 1, 0))
+        return call_end(&c, NULL);
+    Py_ssize_t n = SHAPE(c.b[4], 0) - 1;
     if (need(n >= 0, "indptr: empty (it has one entry more than the owners)") ||
-        need(SHAPE(b[5], 0) == rw.R, "action needs one entry per row") ||
-        need(SHAPE(b[6], 0) >= n && SHAPE(b[7], 0) >= n, "out and arg need one entry per owner") ||
+        need(SHAPE(c.b[5], 0) == rw.R, "action needs one entry per row") ||
+        need(SHAPE(c.b[6], 0) >= n && SHAPE(c.b[7], 0) >= n,
+             "out and arg need one entry per owner") ||
         check_range(start, end, n))
-        goto done;
-    {
-        const int64_t *indptr = (const int64_t *)b[4].b.buf;
-        int t64 = b[1].b.itemsize == 8, failed;
-        Py_BEGIN_ALLOW_THREADS
-        failed = maxmin_range(&rw, t64, indptr, (const int32_t *)b[5].b.buf,
-                              (double *)b[6].b.buf, (int64_t *)b[7].b.buf, start, end, &e);
-        Py_END_ALLOW_THREADS
-        if (!failed) {
-            res = Py_None;
-            Py_INCREF(res);
-        }
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 8);
-    return res;
+        return call_end(&c, NULL);
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = maxmin_range(&rw, (const int64_t *)c.b[4].b.buf, (const int32_t *)c.b[5].b.buf,
+                          (double *)c.b[6].b.buf, (int64_t *)c.b[7].b.buf, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
 }
 
 /* ------------------------------------------------------------------------------ hashes */
 
 #define MULT 0x9E3779B97F4A7C15ULL
 #define SEED 0x2545F4914F6CDD1DULL
+
+/* rows [start, end) of b = owner, action, targets, probbits, out; GET(B, I) the entry I of
+ * owner (B = 0), action (1) or targets (2) */
+#define HASH_LOOP(GET)                                                                     \
+    for (Py_ssize_t r = start; r < end; r++) {                                             \
+        uint64_t h = SEED;                                                                 \
+        h = (h ^ (uint64_t)GET(0, r)) * MULT;                                              \
+        h ^= h >> 31;                                                                      \
+        h = (h ^ (uint64_t)GET(1, r)) * MULT;                                              \
+        h ^= h >> 29;                                                                      \
+        for (Py_ssize_t l = 0; l < L; l++) {                                               \
+            h = (h ^ (uint64_t)GET(2, r * L + l)) * MULT;                                  \
+            h ^= h >> 32;                                                                  \
+            h = (h ^ pb[r * L + l]) * MULT;                                                \
+            h ^= h >> 27;                                                                  \
+        }                                                                                  \
+        out[r] = h;                                                                        \
+    }
+#define GET_ANY(B, I) LD(x[B], I)
+#define GET_I32(B, I) (int64_t)((const int32_t *)x[B].p)[I]
+#define GET_I64(B, I) ((const int64_t *)x[B].p)[I]
+
+static void hash_range(const Buf *b, Py_ssize_t start, Py_ssize_t end) {
+    Py_ssize_t L = SHAPE(b[2], 1);
+    Ix x[3];
+    int size = 0; /* 4 or 8 when owner, action and targets are all int32 or all int64 */
+    for (int k = 0; k < 3; k++) {
+        x[k] = ix(&b[k]);
+        int s_ = x[k].sgn && (x[k].size == 4 || x[k].size == 8) ? (int)x[k].size : -1;
+        size = k == 0 ? s_ : (size == s_ ? size : -1);
+    }
+    const uint64_t *pb = (const uint64_t *)b[3].b.buf;
+    uint64_t *out = (uint64_t *)b[4].b.buf;
+    if (size == 4) {
+        HASH_LOOP(GET_I32)
+    } else if (size == 8) {
+        HASH_LOOP(GET_I64)
+    } else {
+        HASH_LOOP(GET_ANY)
+    }
+}
 
 PyDoc_STRVAR(hash_rows_doc,
              "hash_rows(owner, action, targets, probbits, out, start, end)\n\n"
@@ -413,57 +484,61 @@ static PyObject *hash_rows(PyObject *self, PyObject *args) {
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOOnn", &o_own, &o_act, &o_t, &o_pb, &o_out, &start, &end))
         return NULL;
-    Buf b[5];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_own, &b[0], "owner", 1, K_INT, S_ANY, 0, 0) ||
         get(o_act, &b[1], "action", 1, K_INT, S_ANY, 0, 0) ||
         get(o_t, &b[2], "targets", 2, K_INT, S_ANY, 0, 0) ||
         get(o_pb, &b[3], "probbits", 2, K_INT, 8, 0, 0) ||
         get(o_out, &b[4], "out", 1, K_U, 8, 1, 0))
-        goto done;
-    Py_ssize_t R = SHAPE(b[0], 0), L = SHAPE(b[2], 1);
+        return call_end(&c, NULL);
+    Py_ssize_t R = SHAPE(b[0], 0);
     if (need(SHAPE(b[1], 0) == R && SHAPE(b[2], 0) == R && SHAPE(b[3], 0) == R &&
-                 SHAPE(b[3], 1) == L && SHAPE(b[4], 0) == R,
+                 SHAPE(b[3], 1) == SHAPE(b[2], 1) && SHAPE(b[4], 0) == R,
              "owner, action, targets, probbits and out: rows differ") ||
         check_range(start, end, R))
-        goto done;
-    {
-        const uint64_t *pb = (const uint64_t *)b[3].b.buf;
-        uint64_t *out = (uint64_t *)b[4].b.buf;
-        Py_BEGIN_ALLOW_THREADS
-        for (Py_ssize_t r = start; r < end; r++) {
-            uint64_t h = SEED;
-            h = (h ^ (uint64_t)LD(b[0], r)) * MULT;
-            h ^= h >> 31;
-            h = (h ^ (uint64_t)LD(b[1], r)) * MULT;
-            h ^= h >> 29;
-            for (Py_ssize_t l = 0; l < L; l++) {
-                h = (h ^ (uint64_t)LD(b[2], r * L + l)) * MULT;
-                h ^= h >> 32;
-                h = (h ^ pb[r * L + l]) * MULT;
-                h ^= h >> 27;
-            }
-            out[r] = h;
-        }
-        Py_END_ALLOW_THREADS
-    }
-    res = Py_None;
-    Py_INCREF(res);
-done:
-    release(b, 5);
-    return res;
+        return call_end(&c, NULL);
+    Py_BEGIN_ALLOW_THREADS
+    hash_range(b, start, end);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, none());
 }
 
 /* ------------------------------------------------------------------------------ post-decision */
 
-/* succ (n, A, L) and allowed (n, A); the pair (x, a) has successors succ + (x A + a) L */
+/* succ (n, A, L) and allowed (n, A) into b[0], b[1]: the pair (x, a) has its successors at
+ * (x A + a) L */
 static int get_pairs(PyObject *o_succ, PyObject *o_allowed, Buf *b) {
     if (get(o_succ, &b[0], "succ", 3, K_I, S_IDX, 0, 0) ||
         get(o_allowed, &b[1], "allowed", 2, K_B, 1, 0, 0))
         return -1;
     return need(SHAPE(b[1], 0) == SHAPE(b[0], 0) && SHAPE(b[1], 1) == SHAPE(b[0], 1),
                 "succ and allowed: shapes differ (n, A, L) and (n, A)");
+}
+
+/* states [start, end) of succ (of type TS), allowed, seen */
+#define MARK_LOOP(TS)                                                                      \
+    for (Py_ssize_t x = start; x < end; x++)                                               \
+        for (Py_ssize_t a = 0; a < A; a++)                                                 \
+            if (allowed[x * A + a]) {                                                      \
+                int64_t y = (int64_t)((const TS *)succ)[(x * A + a) * L];                  \
+                if ((uint64_t)y >= (uint64_t)ns)                                           \
+                    return BAD_INDEX(e, "succ", 3, x, a, 0, y, ns);                        \
+                seen[y] = 1;                                                               \
+            }
+
+/* states [start, end) of b = succ, allowed, seen */
+static int mark_range(const Buf *b, Py_ssize_t start, Py_ssize_t end, Bad *e) {
+    Py_ssize_t A = SHAPE(b[0], 1), L = SHAPE(b[0], 2), ns = SHAPE(b[2], 0);
+    const char *allowed = DATA(b[1]), *succ = DATA(b[0]);
+    char *seen = DATA(b[2]);
+    if (b[0].b.itemsize == 8) {
+        MARK_LOOP(int64_t)
+    } else {
+        MARK_LOOP(int32_t)
+    }
+    return 0;
 }
 
 PyDoc_STRVAR(ps_mark_doc,
@@ -475,40 +550,58 @@ static PyObject *ps_mark(PyObject *self, PyObject *args) {
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOnn", &o_s, &o_a, &o_seen, &start, &end))
         return NULL;
-    Buf b[3];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
-    if (get_pairs(o_s, o_a, b) || get(o_seen, &b[2], "seen", 1, K_B, 1, 1, 0) ||
-        check_range(start, end, SHAPE(b[0], 0)))
-        goto done;
-    {
-        Py_ssize_t A = SHAPE(b[0], 1), L = SHAPE(b[0], 2), ns = SHAPE(b[2], 0);
-        const char *allowed = DATA(b[1]);
-        char *seen = DATA(b[2]);
-        Py_BEGIN_ALLOW_THREADS
-        for (Py_ssize_t x = start; x < end && !e.type; x++)
-            for (Py_ssize_t a = 0; a < A; a++)
-                if (allowed[x * A + a]) {
-                    int64_t y = LD(b[0], (x * A + a) * L);
-                    if ((uint64_t)y >= (uint64_t)ns) {
-                        BAD_INDEX(&e, "succ", 3, x, a, 0, y, ns);
-                        break;
-                    }
-                    seen[y] = 1;
-                }
-        Py_END_ALLOW_THREADS
+    Call c;
+    call_init(&c);
+    if (get_pairs(o_s, o_a, c.b) || get(o_seen, &c.b[2], "seen", 1, K_B, 1, 1, 0) ||
+        check_range(start, end, SHAPE(c.b[0], 0)))
+        return call_end(&c, NULL);
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = mark_range(c.b, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
+}
+
+/* states [start, end) of succ and outcomes (of type TS), allowed, post_id and first (of
+ * type TI) */
+#define FILL_LOOP(TS, TI)                                                                  \
+    for (Py_ssize_t x = start; x < end; x++)                                               \
+        for (Py_ssize_t a = 0; a < A; a++) {                                               \
+            Py_ssize_t pair = x * A + a;                                                   \
+            if (!allowed[pair]) {                                                          \
+                ((TI *)first)[pair] = -1;                                                  \
+                continue;                                                                  \
+            }                                                                              \
+            const TS *s_ = (const TS *)succ + pair * L;                                    \
+            int64_t y = (int64_t)s_[0];                                                    \
+            if ((uint64_t)y >= (uint64_t)npid)                                             \
+                return BAD_INDEX(e, "succ", 3, x, a, 0, y, npid);                          \
+            int64_t k = (int64_t)((const TI *)post_id)[y];                                 \
+            if ((uint64_t)k >= (uint64_t)npost)                                            \
+                return BAD_INDEX(e, "post_id", 1, (Py_ssize_t)y, 0, 0, k, npost);          \
+            ((TI *)first)[pair] = (TI)k;                                                   \
+            TS *o_ = (TS *)oc + k * L;                                                     \
+            for (Py_ssize_t l = 0; l < L; l++)                                             \
+                o_[l] = s_[l];                                                             \
+        }
+
+/* states [start, end) of b = succ, allowed, post_id, outcomes, first */
+static int fill_range(const Buf *b, Py_ssize_t start, Py_ssize_t end, Bad *e) {
+    Py_ssize_t A = SHAPE(b[0], 1), L = SHAPE(b[0], 2);
+    Py_ssize_t npid = SHAPE(b[2], 0), npost = SHAPE(b[3], 0);
+    const char *allowed = DATA(b[1]), *succ = DATA(b[0]), *post_id = DATA(b[2]);
+    char *oc = DATA(b[3]), *first = DATA(b[4]);
+    int s64 = b[0].b.itemsize == 8, i64 = b[2].b.itemsize == 8;
+    if (s64 && i64) {
+        FILL_LOOP(int64_t, int64_t)
+    } else if (s64) {
+        FILL_LOOP(int64_t, int32_t)
+    } else if (i64) {
+        FILL_LOOP(int32_t, int64_t)
+    } else {
+        FILL_LOOP(int32_t, int32_t)
     }
-    if (!e.type) {
-        res = Py_None;
-        Py_INCREF(res);
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 3);
-    return res;
+    return 0;
 }
 
 PyDoc_STRVAR(ps_fill_doc,
@@ -521,56 +614,43 @@ static PyObject *ps_fill(PyObject *self, PyObject *args) {
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOOnn", &o_s, &o_a, &o_pid, &o_oc, &o_first, &start, &end))
         return NULL;
-    Buf b[5];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get_pairs(o_s, o_a, b) || get(o_pid, &b[2], "post_id", 1, K_I, S_IDX, 0, 0) ||
         get(o_oc, &b[3], "outcomes", 2, K_I, (int)b[0].b.itemsize, 1, 0) ||
-        get(o_first, &b[4], "first", 2, K_I, S_IDX, 1, 0))
-        goto done;
-    Py_ssize_t n = SHAPE(b[0], 0), A = SHAPE(b[0], 1), L = SHAPE(b[0], 2);
-    if (need(SHAPE(b[3], 1) == L, "outcomes: one column per outcome of succ") ||
-        need(SHAPE(b[4], 0) == n && SHAPE(b[4], 1) == A, "first: shape (n, A) of succ") ||
-        check_range(start, end, n))
-        goto done;
-    {
-        Py_ssize_t npid = SHAPE(b[2], 0), npost = SHAPE(b[3], 0), isz = b[0].b.itemsize;
-        const char *allowed = DATA(b[1]), *succ = DATA(b[0]);
-        char *oc = DATA(b[3]);
-        Py_BEGIN_ALLOW_THREADS
-        for (Py_ssize_t x = start; x < end && !e.type; x++)
-            for (Py_ssize_t a = 0; a < A; a++) {
-                Py_ssize_t pair = x * A + a;
-                if (!allowed[pair]) {
-                    ST(b[4], pair, -1);
-                    continue;
-                }
-                int64_t y = LD(b[0], pair * L);
-                if ((uint64_t)y >= (uint64_t)npid) {
-                    BAD_INDEX(&e, "succ", 3, x, a, 0, y, npid);
-                    break;
-                }
-                int64_t k = LD(b[2], y);
-                if ((uint64_t)k >= (uint64_t)npost) {
-                    BAD_INDEX(&e, "post_id", 1, (Py_ssize_t)y, 0, 0, k, npost);
-                    break;
-                }
-                ST(b[4], pair, k);
-                memcpy(oc + (size_t)k * L * isz, succ + (size_t)pair * L * isz, (size_t)(L * isz));
-            }
-        Py_END_ALLOW_THREADS
-    }
-    if (!e.type) {
-        res = Py_None;
-        Py_INCREF(res);
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 5);
-    return res;
+        get(o_first, &b[4], "first", 2, K_I, (int)b[2].b.itemsize, 1, 0))
+        return call_end(&c, NULL);
+    if (need(SHAPE(b[3], 1) == SHAPE(b[0], 2), "outcomes: one column per outcome of succ") ||
+        need(SHAPE(b[4], 0) == SHAPE(b[0], 0) && SHAPE(b[4], 1) == SHAPE(b[0], 1),
+             "first: shape (n, A) of succ") ||
+        check_range(start, end, SHAPE(b[0], 0)))
+        return call_end(&c, NULL);
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = fill_range(b, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
+}
+
+/* states [start, end) of b = succ, first, outcomes: 1 if a tuple differs, 0, or -1 (*e) */
+static int verify_range(const Buf *b, Py_ssize_t start, Py_ssize_t end, Bad *e) {
+    Py_ssize_t A = SHAPE(b[0], 1), L = SHAPE(b[0], 2), isz = b[0].b.itemsize;
+    Py_ssize_t npost = SHAPE(b[2], 0);
+    const char *succ = DATA(b[0]), *oc = DATA(b[2]);
+    Ix first = ix(&b[1]);
+    for (Py_ssize_t x = start; x < end; x++)
+        for (Py_ssize_t a = 0; a < A; a++) {
+            int64_t k = LD(first, x * A + a);
+            if (k < 0)
+                continue;
+            if (k >= npost)
+                return BAD_INDEX(e, "first", 2, x, a, 0, k, npost);
+            if (memcmp(oc + (size_t)(k * L * isz), succ + (size_t)((x * A + a) * L * isz),
+                       (size_t)(L * isz)) != 0)
+                return 1;
+        }
+    return 0;
 }
 
 PyDoc_STRVAR(ps_verify_doc,
@@ -583,55 +663,24 @@ static PyObject *ps_verify(PyObject *self, PyObject *args) {
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOnn", &o_s, &o_first, &o_oc, &start, &end))
         return NULL;
-    Buf b[3];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_s, &b[0], "succ", 3, K_I, S_IDX, 0, 0) ||
         get(o_first, &b[1], "first", 2, K_I, S_IDX, 0, 0) ||
         get(o_oc, &b[2], "outcomes", 2, K_I, (int)b[0].b.itemsize, 0, 0))
-        goto done;
-    Py_ssize_t n = SHAPE(b[0], 0), A = SHAPE(b[0], 1), L = SHAPE(b[0], 2);
-    if (need(SHAPE(b[1], 0) == n && SHAPE(b[1], 1) == A, "first: shape (n, A) of succ") ||
-        need(SHAPE(b[2], 1) == L, "outcomes: one column per outcome of succ") ||
-        check_range(start, end, n))
-        goto done;
-    {
-        Py_ssize_t npost = SHAPE(b[2], 0), isz = b[0].b.itemsize;
-        const char *succ = DATA(b[0]), *oc = DATA(b[2]);
-        int differ = 0;
-        Py_BEGIN_ALLOW_THREADS
-        for (Py_ssize_t x = start; x < end && !differ && !e.type; x++)
-            for (Py_ssize_t a = 0; a < A; a++) {
-                int64_t k = LD(b[1], x * A + a);
-                if (k < 0)
-                    continue;
-                if (k >= npost) {
-                    BAD_INDEX(&e, "first", 2, x, a, 0, k, npost);
-                    break;
-                }
-                if (memcmp(oc + (size_t)k * L * isz, succ + (size_t)(x * A + a) * L * isz,
-                           (size_t)(L * isz)) != 0) {
-                    differ = 1;
-                    break;
-                }
-            }
-        Py_END_ALLOW_THREADS
-        if (!e.type)
-            res = PyLong_FromLong(differ);
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 3);
-    return res;
+        return call_end(&c, NULL);
+    if (need(SHAPE(b[1], 0) == SHAPE(b[0], 0) && SHAPE(b[1], 1) == SHAPE(b[0], 1),
+             "first: shape (n, A) of succ") ||
+        need(SHAPE(b[2], 1) == SHAPE(b[0], 2), "outcomes: one column per outcome of succ") ||
+        check_range(start, end, SHAPE(b[0], 0)))
+        return call_end(&c, NULL);
+    int differ;
+    Py_BEGIN_ALLOW_THREADS
+    differ = verify_range(b, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, differ < 0 ? NULL : PyLong_FromLong(differ));
 }
-
-PyDoc_STRVAR(ps_expect_doc,
-             "ps_expect(outcomes, probs, v, w, start, end)\n\nw[k] = sum_l probs[l] "
-             "v[outcomes[k, l]] (summed in outcome order from 0.0) for start <= k < end. "
-             "Releases the GIL.");
 
 /* rows [start, end) of outcomes of type TT, LL outcomes (a constant or L) */
 #define EXPECT_LOOP(TT, LL)                                                                \
@@ -648,9 +697,13 @@ PyDoc_STRVAR(ps_expect_doc,
     }
 
 #define DEF_EXPECT(SUF, TT)                                                                \
-    static int expect_##SUF(const char *oc, Py_ssize_t L, const double *p, const double *v, \
-                            Py_ssize_t nv, double *w, Py_ssize_t start, Py_ssize_t end,    \
-                            Bad *e) {                                                      \
+    static int expect_##SUF(const char *oc, Py_ssize_t L, const double *probs,             \
+                            const double *v, Py_ssize_t nv, double *w, Py_ssize_t start,   \
+                            Py_ssize_t end, Bad *e) {                                      \
+        double pl[8]; /* up to 8 probabilities in locals: no store to w aliases them */    \
+        const double *p = pl;                                                              \
+        for (Py_ssize_t l = 0; l < L && l < 8; l++)                                        \
+            pl[l] = probs[l];                                                              \
         switch (L) {                                                                       \
         case 1: EXPECT_LOOP(TT, 1) break;                                                  \
         case 2: EXPECT_LOOP(TT, 2) break;                                                  \
@@ -658,52 +711,49 @@ PyDoc_STRVAR(ps_expect_doc,
         case 4: EXPECT_LOOP(TT, 4) break;                                                  \
         case 5: EXPECT_LOOP(TT, 5) break;                                                  \
         case 6: EXPECT_LOOP(TT, 6) break;                                                  \
-        default: EXPECT_LOOP(TT, L) break;                                                 \
+        case 7: EXPECT_LOOP(TT, 7) break;                                                  \
+        case 8: EXPECT_LOOP(TT, 8) break;                                                  \
+        default:                                                                           \
+            p = probs;                                                                     \
+            EXPECT_LOOP(TT, L) break;                                                      \
         }                                                                                  \
         return 0;                                                                          \
     }
 DEF_EXPECT(i32, int32_t)
 DEF_EXPECT(i64, int64_t)
 
+PyDoc_STRVAR(ps_expect_doc,
+             "ps_expect(outcomes, probs, v, w, start, end)\n\nw[k] = sum_l probs[l] "
+             "v[outcomes[k, l]] (summed in outcome order from 0.0) for start <= k < end. "
+             "Releases the GIL.");
+
 static PyObject *ps_expect(PyObject *self, PyObject *args) {
     PyObject *o_oc, *o_p, *o_v, *o_w;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOnn", &o_oc, &o_p, &o_v, &o_w, &start, &end))
         return NULL;
-    Buf b[4];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_oc, &b[0], "outcomes", 2, K_I, S_IDX, 0, 0) ||
         get(o_p, &b[1], "probs", 1, K_F, 8, 0, 0) || get(o_v, &b[2], "v", 1, K_F, 8, 0, 0) ||
         get(o_w, &b[3], "w", 1, K_F, 8, 1, 0))
-        goto done;
+        return call_end(&c, NULL);
     Py_ssize_t npost = SHAPE(b[0], 0), L = SHAPE(b[0], 1);
     if (need(SHAPE(b[1], 0) == L, "probs: one probability per column of outcomes") ||
         need(SHAPE(b[3], 0) == npost, "w: one entry per row of outcomes") ||
         check_range(start, end, npost))
-        goto done;
-    {
-        int failed;
-        const char *oc = DATA(b[0]);
-        const double *p = (const double *)b[1].b.buf, *v = (const double *)b[2].b.buf;
-        double *w = (double *)b[3].b.buf;
-        Py_ssize_t nv = SHAPE(b[2], 0);
-        Py_BEGIN_ALLOW_THREADS
-        failed = b[0].b.itemsize == 8 ? expect_i64(oc, L, p, v, nv, w, start, end, &e)
-                                      : expect_i32(oc, L, p, v, nv, w, start, end, &e);
-        Py_END_ALLOW_THREADS
-        if (!failed) {
-            res = Py_None;
-            Py_INCREF(res);
-        }
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 4);
-    return res;
+        return call_end(&c, NULL);
+    int failed;
+    const char *oc = DATA(b[0]);
+    const double *p = (const double *)b[1].b.buf, *v = (const double *)b[2].b.buf;
+    double *w = (double *)b[3].b.buf;
+    Py_ssize_t nv = SHAPE(b[2], 0);
+    Py_BEGIN_ALLOW_THREADS
+    failed = b[0].b.itemsize == 8 ? expect_i64(oc, L, p, v, nv, w, start, end, &c.e)
+                                  : expect_i32(oc, L, p, v, nv, w, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
 }
 
 /* The post-decision sweeps' data: first (n, A) int32 / int64, the rewards either plain
@@ -721,17 +771,42 @@ typedef struct {
     double lam;
     const double *v;
     double *out;
-    Buf *arg; /* arg of the max sweep, act of the policy sweep */
+    Ix arg; /* arg of the max sweep, act of the policy sweep */
 } Post;
 
-/* rew = the reward of pair (i, a): plain, or table[codes[i, a]] (TC the code type) */
-#define REW_PLAIN(TC, I, A_, REW) (REW) = ps->reward[(I) * ps->A + (A_)]
-#define REW_CODED(TC, I, A_, REW)                                                          \
+/* the sweep's data in locals (no store aliases them: arg may be int8), first of type TF,
+ * codes of type TC */
+#define POST_LOCALS(TF, TC)                                                                \
+    const TF *first = (const TF *)ps->first;                                               \
+    const Py_ssize_t A = ps->A, nw = ps->nw, ntable = ps->ntable;                          \
+    const double *reward = ps->reward, *table = ps->table, *w = ps->w, *v = ps->v;         \
+    const TC *codes = (const TC *)ps->codes;                                               \
+    const double lam = ps->lam;                                                            \
+    double *out = ps->out;                                                                 \
+    const Ix arg = ps->arg;                                                                \
+    double lc = INFINITY, hc = -INFINITY;                                                  \
+    (void)reward;                                                                          \
+    (void)table;                                                                           \
+    (void)codes;                                                                           \
+    (void)ntable
+
+/* rew = the reward of pair (i, a): plain, or table[codes[i, a]] */
+#define REW_PLAIN(I, A_, REW) (REW) = reward[(I) * A + (A_)]
+#define REW_CODED(I, A_, REW)                                                              \
     do {                                                                                   \
-        int64_t c_ = (int64_t)((const TC *)ps->codes)[(I) * ps->A + (A_)];                 \
-        if (c_ >= ps->ntable)                                                              \
-            return BAD_INDEX(e, "codes", 2, I, A_, 0, c_, ps->ntable);                     \
-        (REW) = ps->table[c_];                                                             \
+        int64_t c_ = (int64_t)codes[(I) * A + (A_)];                                       \
+        if (c_ >= ntable)                                                                  \
+            return BAD_INDEX(e, "codes", 2, I, A_, 0, c_, ntable);                         \
+        (REW) = table[c_];                                                                 \
+    } while (0)
+
+/* the extremes of out - v so far, lc and hc, with D */
+#define EXTREMES(D)                                                                        \
+    do {                                                                                   \
+        if ((D) < lc)                                                                      \
+            lc = (D);                                                                      \
+        if ((D) > hc)                                                                      \
+            hc = (D);                                                                      \
     } while (0)
 
 /* states [start, end): out[i] = max_u reward(i, u) + lam w[first[i, u]], the first
@@ -739,62 +814,54 @@ typedef struct {
 #define DEF_PS_MAX(SUF, TF, TC, REWARD)                                                    \
     static int ps_max_##SUF(const Post *ps, Py_ssize_t start, Py_ssize_t end, double *lo,  \
                             double *hi, Bad *e) {                                          \
-        double lc = INFINITY, hc = -INFINITY;                                              \
+        POST_LOCALS(TF, TC);                                                               \
         for (Py_ssize_t i = start; i < end; i++) {                                         \
-            const TF *f = (const TF *)ps->first + (size_t)i * (size_t)ps->A;               \
+            const TF *f = first + (size_t)i * (size_t)A;                                   \
             double best = -INFINITY;                                                       \
             int64_t best_a = -1;                                                           \
-            for (Py_ssize_t a = 0; a < ps->A; a++) {                                       \
+            for (Py_ssize_t a = 0; a < A; a++) {                                           \
                 int64_t k = (int64_t)f[a];                                                 \
                 if (k < 0)                                                                 \
                     continue;                                                              \
-                if (k >= ps->nw)                                                           \
-                    return BAD_INDEX(e, "first", 2, i, a, 0, k, ps->nw);                   \
+                if (k >= nw)                                                               \
+                    return BAD_INDEX(e, "first", 2, i, a, 0, k, nw);                       \
                 double rew;                                                                \
-                REWARD(TC, i, a, rew);                                                     \
-                double q = rew + ps->lam * ps->w[k];                                       \
+                REWARD(i, a, rew);                                                         \
+                double q = rew + lam * w[k];                                               \
                 if (q > best) {                                                            \
                     best = q;                                                              \
                     best_a = a;                                                            \
                 }                                                                          \
             }                                                                              \
-            ps->out[i] = best;                                                             \
-            ST(*ps->arg, i, best_a);                                                       \
-            double d = best - ps->v[i];                                                    \
-            if (d < lc)                                                                    \
-                lc = d;                                                                    \
-            if (d > hc)                                                                    \
-                hc = d;                                                                    \
+            out[i] = best;                                                                 \
+            ST(arg, i, best_a);                                                            \
+            EXTREMES(best - v[i]);                                                         \
         }                                                                                  \
         *lo = lc;                                                                          \
         *hi = hc;                                                                          \
         return 0;                                                                          \
     }
 
-/* states [start, end): out[i] = reward(i, a) + lam w[first[i, a]] with a = act[i] */
+/* states [start, end): out[i] = reward(i, a) + lam w[first[i, a]] with a = act[i] (arg) */
 #define DEF_PS_POLICY(SUF, TF, TC, REWARD)                                                 \
     static int ps_policy_##SUF(const Post *ps, Py_ssize_t start, Py_ssize_t end, double *lo, \
                                double *hi, Bad *e) {                                       \
-        double lc = INFINITY, hc = -INFINITY;                                              \
+        POST_LOCALS(TF, TC);                                                               \
         for (Py_ssize_t i = start; i < end; i++) {                                         \
-            int64_t a = LD(*ps->arg, i);                                                   \
-            if ((uint64_t)a >= (uint64_t)ps->A)                                            \
-                return BAD_INDEX(e, "act", 1, i, 0, 0, a, ps->A);                          \
-            int64_t k = (int64_t)((const TF *)ps->first)[i * ps->A + a];                   \
+            int64_t a = LD(arg, i);                                                        \
+            if ((uint64_t)a >= (uint64_t)A)                                                \
+                return BAD_INDEX(e, "act", 1, i, 0, 0, a, A);                              \
+            int64_t k = (int64_t)first[i * A + a];                                         \
             if (k < 0)                                                                     \
                 return bad(e, PyExc_IndexError, "act", 1, i, 0, 0, a, 0,                   \
                            "is not allowed at that state (first = -1)");                   \
-            if (k >= ps->nw)                                                               \
-                return BAD_INDEX(e, "first", 2, i, (Py_ssize_t)a, 0, k, ps->nw);           \
+            if (k >= nw)                                                                   \
+                return BAD_INDEX(e, "first", 2, i, (Py_ssize_t)a, 0, k, nw);               \
             double rew;                                                                    \
-            REWARD(TC, i, a, rew);                                                         \
-            double q = rew + ps->lam * ps->w[k];                                           \
-            ps->out[i] = q;                                                                \
-            double d = q - ps->v[i];                                                       \
-            if (d < lc)                                                                    \
-                lc = d;                                                                    \
-            if (d > hc)                                                                    \
-                hc = d;                                                                    \
+            REWARD(i, a, rew);                                                             \
+            double q = rew + lam * w[k];                                                   \
+            out[i] = q;                                                                    \
+            EXTREMES(q - v[i]);                                                            \
         }                                                                                  \
         *lo = lc;                                                                          \
         *hi = hc;                                                                          \
@@ -823,19 +890,20 @@ static PostRange post_range(int policy, Py_ssize_t first_size, Py_ssize_t code_s
     static const PostRange pol_fns[2][4] = {
         {ps_policy_i32_f, ps_policy_i32_u8, ps_policy_i32_u16, ps_policy_i32_u32},
         {ps_policy_i64_f, ps_policy_i64_u8, ps_policy_i64_u16, ps_policy_i64_u32}};
-    int fi = first_size == 8, ci = code_size == 0 ? 0 : code_size == 1 ? 1 : code_size == 2 ? 2 : 3;
+    int fi = first_size == 8;
+    int ci = code_size == 0 ? 0 : code_size == 1 ? 1 : code_size == 2 ? 2 : 3;
     return policy ? pol_fns[fi][ci] : max_fns[fi][ci];
 }
 
 /* Parse and run one post-decision sweep: max (arg written) or policy (act read), plain or
  * coded rewards. The arguments, in order: first, [codes, table | reward], [act], w,
- * discount, v, out, [arg], start, end. */
+ * discount, v, out, [arg], start, end; o[] takes them as first, reward or codes, table,
+ * act or arg, w, v, out. */
 static PyObject *post_sweep(PyObject *args, int policy, int coded) {
-    PyObject *o[9];
+    PyObject *o[7] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     double lam;
     Py_ssize_t start, end;
     int ok;
-    /* first, rewards (1 or 2), [act], w, discount, v, out, [arg] */
     if (coded && policy)
         ok = PyArg_ParseTuple(args, "OOOOOdOOnn", &o[0], &o[1], &o[2], &o[3], &o[4], &lam, &o[5],
                               &o[6], &start, &end);
@@ -850,12 +918,9 @@ static PyObject *post_sweep(PyObject *args, int policy, int coded) {
                               &start, &end);
     if (!ok)
         return NULL;
-    /* b: first, reward or codes, table, act or arg, w, v, out */
-    Buf b[7];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o[0], &b[0], "first", 2, K_I, S_IDX, 0, 0) ||
         (coded ? get(o[1], &b[1], "codes", 2, K_U, 1 | 2 | 4, 0, 0) ||
                      get(o[2], &b[2], "table", 1, K_F, 8, 0, 0)
@@ -863,7 +928,7 @@ static PyObject *post_sweep(PyObject *args, int policy, int coded) {
         get(o[3], &b[3], policy ? "act" : "arg", 1, K_INT, S_ANY, !policy, 0) ||
         get(o[4], &b[4], "w", 1, K_F, 8, 0, 0) || get(o[5], &b[5], "v", 1, K_F, 8, 0, 0) ||
         get(o[6], &b[6], "out", 1, K_F, 8, 1, 0))
-        goto done;
+        return call_end(&c, NULL);
     Post ps;
     ps.n = SHAPE(b[0], 0);
     ps.A = SHAPE(b[0], 1);
@@ -873,7 +938,7 @@ static PyObject *post_sweep(PyObject *args, int policy, int coded) {
              policy ? "act, v and out need one entry per state (row of first)"
                     : "arg, v and out need one entry per state (row of first)") ||
         check_range(start, end, ps.n))
-        goto done;
+        return call_end(&c, NULL);
     ps.first = DATA(b[0]);
     ps.reward = coded ? NULL : (const double *)b[1].b.buf;
     ps.codes = coded ? DATA(b[1]) : NULL;
@@ -884,22 +949,14 @@ static PyObject *post_sweep(PyObject *args, int policy, int coded) {
     ps.lam = lam;
     ps.v = (const double *)b[5].b.buf;
     ps.out = (double *)b[6].b.buf;
-    ps.arg = &b[3];
-    {
-        PostRange fn = post_range(policy, b[0].b.itemsize, coded ? b[1].b.itemsize : 0);
-        double lo = INFINITY, hi = -INFINITY;
-        int failed;
-        Py_BEGIN_ALLOW_THREADS
-        failed = fn(&ps, start, end, &lo, &hi, &e);
-        Py_END_ALLOW_THREADS
-        if (!failed)
-            res = Py_BuildValue("dd", lo, hi);
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 7);
-    return res;
+    ps.arg = ix(&b[3]);
+    PostRange fn = post_range(policy, b[0].b.itemsize, coded ? b[1].b.itemsize : 0);
+    double lo = INFINITY, hi = -INFINITY;
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = fn(&ps, start, end, &lo, &hi, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : Py_BuildValue("dd", lo, hi));
 }
 
 PyDoc_STRVAR(ps_max_stats_doc,
@@ -932,6 +989,38 @@ static PyObject *ps_policy_stats_coded(PyObject *self, PyObject *args) {
     return post_sweep(args, 1, 1);
 }
 
+/* states [start, end): out[x] = rs[x] + allowed actions below a = GET(x) */
+#define ROWS_LOOP(GET)                                                                     \
+    for (Py_ssize_t x = start; x < end; x++) {                                             \
+        int64_t a = GET(x);                                                                \
+        if ((uint64_t)a >= (uint64_t)A)                                                    \
+            return BAD_INDEX(e, "act", 1, x, 0, 0, a, A);                                  \
+        int64_t r = rs[x];                                                                 \
+        for (int64_t u = 0; u < a; u++)                                                    \
+            r += allowed[x * A + u] != 0;                                                  \
+        out[x] = r;                                                                        \
+    }
+#define ACT_ANY(X) LD(act, X)
+#define ACT_I8(X) (int64_t)((const int8_t *)act.p)[X]
+#define ACT_I64(X) ((const int64_t *)act.p)[X]
+
+/* states [start, end) of b = allowed, row_start, act, out */
+static int rows_range(const Buf *b, Py_ssize_t start, Py_ssize_t end, Bad *e) {
+    Py_ssize_t A = SHAPE(b[0], 1);
+    const char *allowed = DATA(b[0]);
+    const int64_t *rs = (const int64_t *)b[1].b.buf;
+    int64_t *out = (int64_t *)b[3].b.buf;
+    Ix act = ix(&b[2]);
+    if (act.sgn && act.size == 1) { /* the int8 actions of PostDecisionRows.new_arg */
+        ROWS_LOOP(ACT_I8)
+    } else if (act.sgn && act.size == 8) {
+        ROWS_LOOP(ACT_I64)
+    } else {
+        ROWS_LOOP(ACT_ANY)
+    }
+    return 0;
+}
+
 PyDoc_STRVAR(ps_rows_doc,
              "ps_rows(allowed, row_start, act, out, start, end)\n\nFor states start <= x < end: "
              "out[x] = row_start[x] + the number of allowed actions below act[x] (the row of "
@@ -942,48 +1031,51 @@ static PyObject *ps_rows(PyObject *self, PyObject *args) {
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOnn", &o_a, &o_rs, &o_act, &o_out, &start, &end))
         return NULL;
-    Buf b[4];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_a, &b[0], "allowed", 2, K_B, 1, 0, 0) ||
         get(o_rs, &b[1], "row_start", 1, K_I, 8, 0, 0) ||
         get(o_act, &b[2], "act", 1, K_INT, S_ANY, 0, 0) ||
         get(o_out, &b[3], "out", 1, K_I, 8, 1, 0))
-        goto done;
-    Py_ssize_t n = SHAPE(b[0], 0), A = SHAPE(b[0], 1);
+        return call_end(&c, NULL);
+    Py_ssize_t n = SHAPE(b[0], 0);
     if (need(SHAPE(b[1], 0) == n && SHAPE(b[2], 0) == n && SHAPE(b[3], 0) == n,
              "row_start, act and out need one entry per state (row of allowed)") ||
         check_range(start, end, n))
-        goto done;
-    {
-        const char *allowed = DATA(b[0]);
-        const int64_t *rs = (const int64_t *)b[1].b.buf;
-        int64_t *out = (int64_t *)b[3].b.buf;
-        Py_BEGIN_ALLOW_THREADS
-        for (Py_ssize_t x = start; x < end; x++) {
-            int64_t a = LD(b[2], x);
-            if ((uint64_t)a >= (uint64_t)A) {
-                BAD_INDEX(&e, "act", 1, x, 0, 0, a, A);
-                break;
-            }
-            int64_t r = rs[x];
-            for (int64_t u = 0; u < a; u++)
-                r += allowed[x * A + u] != 0;
-            out[x] = r;
+        return call_end(&c, NULL);
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = rows_range(b, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
+}
+
+/* The codes of the n rewards (see reward_codes_doc) with an open-addressing table of
+ * ``size`` slots (a power of two) on the values' bits: keys, vals. */
+static long long code_pass(const double *rew, Py_ssize_t n, long long max_codes, Ix codes,
+                           double *table, int64_t *keys, int64_t *vals, long long size) {
+    long long count = 0;
+    uint64_t mask = (uint64_t)size - 1;
+    for (long long j = 0; j < size; j++)
+        vals[j] = -1;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        int64_t key;
+        memcpy(&key, &rew[i], sizeof key);
+        uint64_t j = (((uint64_t)key * MULT) >> 40) & mask;
+        while (vals[j] >= 0 && keys[j] != key)
+            j = (j + 1) & mask;
+        if (vals[j] < 0) {
+            if (count >= max_codes)
+                return -1;
+            keys[j] = key;
+            vals[j] = count;
+            table[count] = rew[i];
+            count++;
         }
-        Py_END_ALLOW_THREADS
+        ST(codes, i, vals[j]);
     }
-    if (!e.type) {
-        res = Py_None;
-        Py_INCREF(res);
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 4);
-    return res;
+    return count;
 }
 
 PyDoc_STRVAR(reward_codes_doc,
@@ -998,74 +1090,133 @@ static PyObject *reward_codes(PyObject *self, PyObject *args) {
     long long max_codes;
     if (!PyArg_ParseTuple(args, "OLOO", &o_rew, &max_codes, &o_codes, &o_table))
         return NULL;
-    Buf b[3];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_rew, &b[0], "reward", 2, K_F, 8, 0, 0) ||
         get(o_codes, &b[1], "codes", 2, K_U, 1 | 2 | 4, 1, 0) ||
         get(o_table, &b[2], "table", 1, K_F, 8, 1, 0))
-        goto done;
+        return call_end(&c, NULL);
     Py_ssize_t n = SHAPE(b[0], 0) * SHAPE(b[0], 1);
-    long long room = 1LL << (8 * b[1].b.itemsize);
+    long long most = max_codes < n ? max_codes : (long long)n; /* codes the pass can make */
     if (need(SHAPE(b[1], 0) == SHAPE(b[0], 0) && SHAPE(b[1], 1) == SHAPE(b[0], 1),
              "codes: the shape of reward") ||
-        need(max_codes <= room, "max_codes: more codes than the dtype of codes holds") ||
-        need(max_codes <= 0 || SHAPE(b[2], 0) >= (max_codes < n ? max_codes : n),
-             "table: shorter than max_codes"))
-        goto done;
-    if (max_codes < 1) {
-        res = PyLong_FromLongLong(n == 0 ? 0 : -1);
-        goto done;
-    }
-    {
-        /* an open-addressing table on the values' bits; never more slots than values */
-        long long want = 4 * (max_codes < n ? max_codes : (long long)n), size = 1;
-        while (size < want)
-            size *= 2;
-        int64_t *keys = PyMem_Malloc((size_t)size * sizeof(int64_t));
-        int64_t *vals = PyMem_Malloc((size_t)size * sizeof(int64_t));
-        if (keys == NULL || vals == NULL) {
-            PyMem_Free(keys);
-            PyMem_Free(vals);
-            PyErr_NoMemory();
-            goto done;
-        }
-        const double *rew = (const double *)b[0].b.buf;
-        double *table = (double *)b[2].b.buf;
-        long long count = 0;
-        uint64_t mask = (uint64_t)size - 1;
-        Py_BEGIN_ALLOW_THREADS
-        for (long long j = 0; j < size; j++)
-            vals[j] = -1;
-        for (Py_ssize_t i = 0; i < n; i++) {
-            int64_t key;
-            memcpy(&key, &rew[i], sizeof key);
-            uint64_t j = (((uint64_t)key * MULT) >> 40) & mask;
-            while (vals[j] >= 0 && keys[j] != key)
-                j = (j + 1) & mask;
-            if (vals[j] < 0) {
-                if (count >= max_codes) {
-                    count = -1;
-                    break;
-                }
-                keys[j] = key;
-                vals[j] = count;
-                table[count] = rew[i];
-                count++;
-            }
-            ST(b[1], i, vals[j]);
-        }
-        Py_END_ALLOW_THREADS
+        need(max_codes <= (1LL << (8 * b[1].b.itemsize)),
+             "max_codes: more codes than the dtype of codes holds") ||
+        need(most <= SHAPE(b[2], 0), "table: shorter than max_codes"))
+        return call_end(&c, NULL);
+    if (max_codes < 1)
+        return call_end(&c, PyLong_FromLongLong(n == 0 ? 0 : -1));
+    long long size = 1;
+    while (size < 4 * most)
+        size *= 2;
+    int64_t *keys = PyMem_Malloc((size_t)size * sizeof(int64_t));
+    int64_t *vals = PyMem_Malloc((size_t)size * sizeof(int64_t));
+    if (keys == NULL || vals == NULL) {
         PyMem_Free(keys);
         PyMem_Free(vals);
-        res = PyLong_FromLongLong(count);
+        return call_end(&c, PyErr_NoMemory());
     }
-done:
-    release(b, 3);
-    return res;
+    long long count;
+    Py_BEGIN_ALLOW_THREADS
+    count = code_pass((const double *)b[0].b.buf, n, max_codes, ix(&b[1]), (double *)b[2].b.buf,
+                      keys, vals, size);
+    Py_END_ALLOW_THREADS
+    PyMem_Free(keys);
+    PyMem_Free(vals);
+    return call_end(&c, PyLong_FromLongLong(count));
 }
 
 /* ------------------------------------------------------------------------------ aggregation */
+
+/* rows [start, end) of labels and out_t (of type TL), succ (of type TS): see
+ * canonical_rows_doc; t, p: scratch rows of L entries */
+#define CANONICAL_LOOP(TL, TS)                                                             \
+    for (Py_ssize_t r = start; r < end; r++) {                                             \
+        const TS *s_ = (const TS *)succ + r * L;                                           \
+        TL *ot = (TL *)out_t + r * L;                                                      \
+        double *orow = op + r * L;                                                         \
+        for (Py_ssize_t l = 0; l < L; l++) {                                               \
+            int64_t y = (int64_t)s_[l];                                                    \
+            if ((uint64_t)y >= (uint64_t)nl)                                               \
+                return BAD_INDEX(e, "succ", 2, r, l, 0, y, nl);                            \
+            t[l] = (int64_t)((const TL *)labels)[y];                                       \
+            p[l] = *(const double *)(probs + r * ps0 + l * ps1);                           \
+        }                                                                                  \
+        for (Py_ssize_t a = 1; a < L; a++) { /* stable insertion sort by target */         \
+            int64_t tk = t[a];                                                             \
+            double pk = p[a];                                                              \
+            Py_ssize_t c = a - 1;                                                          \
+            while (c >= 0 && t[c] > tk) {                                                  \
+                t[c + 1] = t[c];                                                           \
+                p[c + 1] = p[c];                                                           \
+                c--;                                                                       \
+            }                                                                              \
+            t[c + 1] = tk;                                                                 \
+            p[c + 1] = pk;                                                                 \
+        }                                                                                  \
+        Py_ssize_t k = 0;                                                                  \
+        for (Py_ssize_t a = 0; a < L; a++) { /* merge equal targets, drop zeros */         \
+            if (p[a] == 0.0)                                                               \
+                continue;                                                                  \
+            if (k > 0 && (int64_t)ot[k - 1] == t[a]) {                                     \
+                orow[k - 1] += p[a];                                                       \
+            } else {                                                                       \
+                ot[k] = (TL)t[a];                                                          \
+                orow[k] = p[a];                                                            \
+                k++;                                                                       \
+            }                                                                              \
+        }                                                                                  \
+        if (k == 0) {                                                                      \
+            ot[0] = (TL)t[0];                                                              \
+            orow[0] = 0.0;                                                                 \
+            k = 1;                                                                         \
+        }                                                                                  \
+        for (Py_ssize_t a = k; a < L; a++) {                                               \
+            ot[a] = ot[0];                                                                 \
+            orow[a] = 0.0;                                                                 \
+        }                                                                                  \
+        int64_t x = LD(state, r);                                                          \
+        if ((uint64_t)x >= (uint64_t)nl)                                                   \
+            return BAD_INDEX(e, "state", 1, r, 0, 0, x, nl);                               \
+        int64_t o = (int64_t)((const TL *)labels)[x];                                      \
+        ((TL *)out_owner)[r] = (TL)o;                                                      \
+        uint64_t h = SEED;                                                                 \
+        for (Py_ssize_t a = 0; a < L; a++) {                                               \
+            h = (h ^ (uint64_t)(int64_t)ot[a]) * MULT;                                     \
+            h ^= h >> 32;                                                                  \
+            h = (h ^ (uint64_t)(orow[a] * scale)) * MULT;                                  \
+            h ^= h >> 29;                                                                  \
+        }                                                                                  \
+        oa[r] = o * n_actions + LD(action, r);                                             \
+        okey[r] = h;                                                                       \
+    }
+
+/* rows [start, end) of b = labels, state, action, succ, probs, out_owner, out_t, out_p,
+ * out_oa, out_key (see canonical_rows_doc); t, p: scratch rows of L entries */
+static int canonical_range(const Buf *b, int64_t n_actions, Py_ssize_t start, Py_ssize_t end,
+                           int64_t *t, double *p, Bad *e) {
+    Py_ssize_t L = SHAPE(b[3], 1), nl = SHAPE(b[0], 0);
+    Py_ssize_t ps0 = b[4].b.strides[0], ps1 = b[4].b.strides[1];
+    const char *labels = DATA(b[0]), *succ = DATA(b[3]), *probs = DATA(b[4]);
+    char *out_owner = DATA(b[5]), *out_t = DATA(b[6]);
+    Ix state = ix(&b[1]), action = ix(&b[2]);
+    double *op = (double *)b[7].b.buf;
+    int64_t *oa = (int64_t *)b[8].b.buf;
+    uint64_t *okey = (uint64_t *)b[9].b.buf;
+    const double scale = 9007199254740992.0; /* 2**53: probabilities to integers for the hash */
+    int l64 = b[0].b.itemsize == 8, s64 = b[3].b.itemsize == 8;
+    if (l64 && s64) {
+        CANONICAL_LOOP(int64_t, int64_t)
+    } else if (l64) {
+        CANONICAL_LOOP(int64_t, int32_t)
+    } else if (s64) {
+        CANONICAL_LOOP(int32_t, int64_t)
+    } else {
+        CANONICAL_LOOP(int32_t, int32_t)
+    }
+    return 0;
+}
 
 PyDoc_STRVAR(canonical_rows_doc,
              "canonical_rows(labels, state, action, succ, probs, n_actions, out_owner, out_t, "
@@ -1076,91 +1227,16 @@ PyDoc_STRVAR(canonical_rows_doc,
              "out_oa[r] = out_owner[r] * n_actions + action[r] and out_key[r] a 64-bit hash of "
              "the canonical row. Releases the GIL.");
 
-static int canonical_range(Buf *b, int64_t n_actions, Py_ssize_t start, Py_ssize_t end,
-                           int64_t *t, double *p, Bad *e) {
-    /* b: labels, state, action, succ, probs, out_owner, out_t, out_p, out_oa, out_key */
-    Py_ssize_t L = SHAPE(b[3], 1), nl = SHAPE(b[0], 0);
-    Py_ssize_t ps0 = b[4].b.strides[0], ps1 = b[4].b.strides[1];
-    const char *probs = DATA(b[4]);
-    double *op = (double *)b[7].b.buf;
-    int64_t *oa = (int64_t *)b[8].b.buf;
-    uint64_t *okey = (uint64_t *)b[9].b.buf;
-    const double scale = 9007199254740992.0; /* 2**53: probabilities to integers for the hash */
-    for (Py_ssize_t r = start; r < end; r++) {
-        for (Py_ssize_t l = 0; l < L; l++) {
-            int64_t y = LD(b[3], r * L + l);
-            if ((uint64_t)y >= (uint64_t)nl)
-                return BAD_INDEX(e, "succ", 2, r, l, 0, y, nl);
-            t[l] = LD(b[0], y);
-            p[l] = *(const double *)(probs + r * ps0 + l * ps1);
-        }
-        for (Py_ssize_t a = 1; a < L; a++) { /* stable insertion sort by target */
-            int64_t tk = t[a];
-            double pk = p[a];
-            Py_ssize_t c = a - 1;
-            while (c >= 0 && t[c] > tk) {
-                t[c + 1] = t[c];
-                p[c + 1] = p[c];
-                c--;
-            }
-            t[c + 1] = tk;
-            p[c + 1] = pk;
-        }
-        double *orow = op + (size_t)r * L;
-        Py_ssize_t k = 0;
-        int64_t last = 0;
-        for (Py_ssize_t a = 0; a < L; a++) {
-            if (p[a] == 0.0)
-                continue;
-            if (k > 0 && last == t[a]) {
-                orow[k - 1] += p[a];
-            } else {
-                ST(b[6], r * L + k, t[a]);
-                orow[k] = p[a];
-                last = t[a];
-                k++;
-            }
-        }
-        if (k == 0) {
-            ST(b[6], r * L, t[0]);
-            orow[0] = 0.0;
-            k = 1;
-        }
-        int64_t t0 = LD(b[6], r * L);
-        for (Py_ssize_t a = k; a < L; a++) {
-            ST(b[6], r * L + a, t0);
-            orow[a] = 0.0;
-        }
-        int64_t x = LD(b[1], r);
-        if ((uint64_t)x >= (uint64_t)nl)
-            return BAD_INDEX(e, "state", 1, r, 0, 0, x, nl);
-        int64_t o = LD(b[0], x);
-        ST(b[5], r, o);
-        uint64_t h = SEED;
-        for (Py_ssize_t a = 0; a < L; a++) {
-            h = (h ^ (uint64_t)LD(b[6], r * L + a)) * MULT;
-            h ^= h >> 32;
-            h = (h ^ (uint64_t)(orow[a] * scale)) * MULT;
-            h ^= h >> 29;
-        }
-        oa[r] = o * n_actions + LD(b[2], r);
-        okey[r] = h;
-    }
-    return 0;
-}
-
 static PyObject *canonical_rows(PyObject *self, PyObject *args) {
-    PyObject *o[11];
+    PyObject *o[10];
     long long n_actions;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOOLOOOOOnn", &o[0], &o[1], &o[2], &o[3], &o[4], &n_actions,
                           &o[5], &o[6], &o[7], &o[8], &o[9], &start, &end))
         return NULL;
-    Buf b[10];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o[0], &b[0], "labels", 1, K_I, S_IDX, 0, 0) ||
         get(o[1], &b[1], "state", 1, K_I, S_IDX, 0, 0) ||
         get(o[2], &b[2], "action", 1, K_INT, S_ANY, 0, 0) ||
@@ -1171,7 +1247,7 @@ static PyObject *canonical_rows(PyObject *self, PyObject *args) {
         get(o[7], &b[7], "out_p", 2, K_F, 8, 1, 0) ||
         get(o[8], &b[8], "out_oa", 1, K_I, 8, 1, 0) ||
         get(o[9], &b[9], "out_key", 1, K_U, 8, 1, 0))
-        goto done;
+        return call_end(&c, NULL);
     Py_ssize_t R = SHAPE(b[3], 0), L = SHAPE(b[3], 1);
     if (need(L >= 1, "succ: rows need at least one outcome") ||
         need(SHAPE(b[1], 0) == R && SHAPE(b[2], 0) == R && SHAPE(b[5], 0) == R &&
@@ -1181,32 +1257,41 @@ static PyObject *canonical_rows(PyObject *self, PyObject *args) {
                  SHAPE(b[6], 1) == L && SHAPE(b[7], 0) == R && SHAPE(b[7], 1) == L,
              "probs, out_t and out_p: the shape of succ") ||
         check_range(start, end, R))
-        goto done;
-    {
-        int64_t *t = PyMem_Malloc((size_t)L * sizeof(int64_t));
-        double *p = PyMem_Malloc((size_t)L * sizeof(double));
-        int failed;
-        if (t == NULL || p == NULL) {
-            PyMem_Free(t);
-            PyMem_Free(p);
-            PyErr_NoMemory();
-            goto done;
-        }
-        Py_BEGIN_ALLOW_THREADS
-        failed = canonical_range(b, (int64_t)n_actions, start, end, t, p, &e);
-        Py_END_ALLOW_THREADS
+        return call_end(&c, NULL);
+    int64_t *t = PyMem_Malloc((size_t)L * sizeof(int64_t));
+    double *p = PyMem_Malloc((size_t)L * sizeof(double));
+    if (t == NULL || p == NULL) {
         PyMem_Free(t);
         PyMem_Free(p);
-        if (!failed) {
-            res = Py_None;
-            Py_INCREF(res);
-        }
+        return call_end(&c, PyErr_NoMemory());
     }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 10);
-    return res;
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = canonical_range(b, (int64_t)n_actions, start, end, t, p, &c.e);
+    Py_END_ALLOW_THREADS
+    PyMem_Free(t);
+    PyMem_Free(p);
+    return call_end(&c, failed ? NULL : none());
+}
+
+/* the stable counting sort of bucket_order_doc; off zeroed, nb + 1 entries */
+static int bucket_pass(const int64_t *oa, Py_ssize_t n, int64_t *order, int64_t *off,
+                       Py_ssize_t nb, Bad *e) {
+    for (Py_ssize_t r = 0; r < n; r++) {
+        if ((uint64_t)oa[r] >= (uint64_t)nb)
+            return BAD_INDEX(e, "oa", 1, r, 0, 0, oa[r], nb);
+        off[oa[r] + 1]++;
+    }
+    for (Py_ssize_t k = 0; k < nb; k++)
+        off[k + 1] += off[k];
+    /* off[k] moves on to the next free slot of bucket k, ending at the start of bucket
+     * k + 1; shifted back after */
+    for (Py_ssize_t r = 0; r < n; r++)
+        order[off[oa[r]]++] = r;
+    for (Py_ssize_t k = nb; k > 0; k--)
+        off[k] = off[k - 1];
+    off[0] = 0;
+    return 0;
 }
 
 PyDoc_STRVAR(bucket_order_doc,
@@ -1218,51 +1303,23 @@ static PyObject *bucket_order(PyObject *self, PyObject *args) {
     PyObject *o_oa, *o_order, *o_off;
     if (!PyArg_ParseTuple(args, "OOO", &o_oa, &o_order, &o_off))
         return NULL;
-    Buf b[3];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_oa, &b[0], "oa", 1, K_I, 8, 0, 0) || get(o_order, &b[1], "order", 1, K_I, 8, 1, 0) ||
         get(o_off, &b[2], "offsets", 1, K_I, 8, 1, 0))
-        goto done;
+        return call_end(&c, NULL);
     Py_ssize_t n = SHAPE(b[0], 0), nb = SHAPE(b[2], 0) - 1;
     if (need(SHAPE(b[1], 0) == n, "order: one entry per entry of oa") ||
         need(nb >= 0, "offsets: empty (it has one entry more than the buckets)"))
-        goto done;
-    {
-        const int64_t *oa = (const int64_t *)b[0].b.buf;
-        int64_t *order = (int64_t *)b[1].b.buf, *off = (int64_t *)b[2].b.buf;
-        Py_BEGIN_ALLOW_THREADS
-        memset(off, 0, (size_t)(nb + 1) * sizeof(int64_t));
-        for (Py_ssize_t r = 0; r < n; r++) {
-            if ((uint64_t)oa[r] >= (uint64_t)nb) {
-                BAD_INDEX(&e, "oa", 1, r, 0, 0, oa[r], nb);
-                break;
-            }
-            off[oa[r] + 1]++;
-        }
-        if (!e.type) {
-            for (Py_ssize_t k = 0; k < nb; k++)
-                off[k + 1] += off[k];
-            /* the buckets' next free slots: offsets shifted down by one, then restored */
-            for (Py_ssize_t r = 0; r < n; r++)
-                order[off[oa[r]]++] = r;
-            for (Py_ssize_t k = nb; k > 0; k--)
-                off[k] = off[k - 1];
-            off[0] = 0;
-        }
-        Py_END_ALLOW_THREADS
-    }
-    if (!e.type) {
-        res = Py_None;
-        Py_INCREF(res);
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 3);
-    return res;
+        return call_end(&c, NULL);
+    int failed;
+    int64_t *off = (int64_t *)b[2].b.buf;
+    Py_BEGIN_ALLOW_THREADS
+    memset(off, 0, (size_t)(nb + 1) * sizeof(int64_t));
+    failed = bucket_pass((const int64_t *)b[0].b.buf, n, (int64_t *)b[1].b.buf, off, nb, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
 }
 
 /* rows of a bucket with their keys, sorted by key, stably */
@@ -1312,14 +1369,10 @@ static void sort_keyed(Keyed *a, Keyed *scratch, Py_ssize_t n) {
         memcpy(a, src, (size_t)n * sizeof(Keyed));
 }
 
-PyDoc_STRVAR(sort_buckets_doc,
-             "sort_buckets(order, offsets, key, start, end)\n\nSort each bucket "
-             "order[offsets[b]:offsets[b+1]] of start <= b < end by key[row], stably (rows "
-             "with equal keys keep their order), in place. Releases the GIL.");
-
 #define OFFSETS_WHY                                                                        \
     "is not an offset into order: offsets must be non-decreasing within [0, len(order)]"
 
+/* buckets [start, end) of order (n rows) by key (nk entries): see sort_buckets_doc */
 static int sort_range(int64_t *order, Py_ssize_t n, const int64_t *off, const uint64_t *key,
                       Py_ssize_t nk, Py_ssize_t start, Py_ssize_t end, Bad *e) {
     Py_ssize_t most = 0;
@@ -1335,8 +1388,8 @@ static int sort_range(int64_t *order, Py_ssize_t n, const int64_t *off, const ui
         return 0;
     Keyed *buf = PyMem_RawMalloc(2 * (size_t)most * sizeof(Keyed));
     if (buf == NULL)
-        return bad(e, PyExc_MemoryError, "sort_buckets", 1, 0, 0, 0, most, 0,
-                   "rows in a bucket: no memory to sort them");
+        return bad(e, PyExc_MemoryError, "offsets", 1, 0, 0, 0, most, 0,
+                   "rows in the largest bucket: no memory to sort them");
     for (Py_ssize_t k = start; k < end; k++) {
         Py_ssize_t lo = (Py_ssize_t)off[k], m = (Py_ssize_t)(off[k + 1] - off[k]);
         if (m < 2)
@@ -1358,39 +1411,68 @@ static int sort_range(int64_t *order, Py_ssize_t n, const int64_t *off, const ui
     return 0;
 }
 
+PyDoc_STRVAR(sort_buckets_doc,
+             "sort_buckets(order, offsets, key, start, end)\n\nSort each bucket "
+             "order[offsets[b]:offsets[b+1]] of start <= b < end by key[row], stably (rows "
+             "with equal keys keep their order), in place. Releases the GIL.");
+
 static PyObject *sort_buckets(PyObject *self, PyObject *args) {
     PyObject *o_order, *o_off, *o_key;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOnn", &o_order, &o_off, &o_key, &start, &end))
         return NULL;
-    Buf b[3];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_order, &b[0], "order", 1, K_I, 8, 1, 0) ||
         get(o_off, &b[1], "offsets", 1, K_I, 8, 0, 0) || get(o_key, &b[2], "key", 1, K_U, 8, 0, 0))
-        goto done;
+        return call_end(&c, NULL);
     Py_ssize_t nb = SHAPE(b[1], 0) - 1;
     if (need(nb >= 0, "offsets: empty (it has one entry more than the buckets)") ||
         check_range(start, end, nb))
-        goto done;
-    {
-        int failed;
-        Py_BEGIN_ALLOW_THREADS
-        failed = sort_range((int64_t *)b[0].b.buf, SHAPE(b[0], 0), (const int64_t *)b[1].b.buf,
-                            (const uint64_t *)b[2].b.buf, SHAPE(b[2], 0), start, end, &e);
-        Py_END_ALLOW_THREADS
-        if (!failed) {
-            res = Py_None;
-            Py_INCREF(res);
+        return call_end(&c, NULL);
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = sort_range((int64_t *)b[0].b.buf, SHAPE(b[0], 0), (const int64_t *)b[1].b.buf,
+                        (const uint64_t *)b[2].b.buf, SHAPE(b[2], 0), start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
+}
+
+/* sorted rows [start, end) of b = order, oa, key, t, pbits, new: 1 on a collision, 0, or
+ * -1 (*e) */
+static int groups_range(const Buf *b, Py_ssize_t start, Py_ssize_t end, Bad *e) {
+    const int64_t *order = (const int64_t *)b[0].b.buf, *oa = (const int64_t *)b[1].b.buf;
+    const uint64_t *key = (const uint64_t *)b[2].b.buf;
+    const int64_t *pb = (const int64_t *)b[4].b.buf;
+    const char *t = DATA(b[3]);
+    Py_ssize_t R = SHAPE(b[1], 0), L = SHAPE(b[3], 1), isz = b[3].b.itemsize;
+    char *new_ = DATA(b[5]);
+    int collision = 0;
+    for (Py_ssize_t i = start; i < end; i++) {
+        int64_t a = order[i];
+        if ((uint64_t)a >= (uint64_t)R)
+            return BAD_INDEX(e, "order", 1, i, 0, 0, a, R);
+        if (i == 0) {
+            new_[i] = 1;
+            continue;
         }
+        int64_t c = order[i - 1];
+        if ((uint64_t)c >= (uint64_t)R)
+            return BAD_INDEX(e, "order", 1, i - 1, 0, 0, c, R);
+        if (oa[a] != oa[c] || key[a] != key[c]) {
+            new_[i] = 1;
+            continue;
+        }
+        int same = memcmp(t + (size_t)(a * L * isz), t + (size_t)(c * L * isz),
+                          (size_t)(L * isz)) == 0 &&
+                   memcmp(pb + (size_t)(a * L), pb + (size_t)(c * L),
+                          (size_t)L * sizeof(int64_t)) == 0;
+        new_[i] = !same;
+        if (!same)
+            collision = 1;
     }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 3);
-    return res;
+    return collision;
 }
 
 PyDoc_STRVAR(mark_groups_doc,
@@ -1405,68 +1487,86 @@ static PyObject *mark_groups(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "OOOOOOnn", &o_order, &o_oa, &o_key, &o_t, &o_pb, &o_new, &start,
                           &end))
         return NULL;
-    Buf b[6];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o_order, &b[0], "order", 1, K_I, 8, 0, 0) ||
         get(o_oa, &b[1], "oa", 1, K_I, 8, 0, 0) || get(o_key, &b[2], "key", 1, K_U, 8, 0, 0) ||
         get(o_t, &b[3], "t", 2, K_I, S_IDX, 0, 0) || get(o_pb, &b[4], "pbits", 2, K_I, 8, 0, 0) ||
         get(o_new, &b[5], "new", 1, K_B, 1, 1, 0))
-        goto done;
-    Py_ssize_t n = SHAPE(b[0], 0), R = SHAPE(b[1], 0), L = SHAPE(b[3], 1);
+        return call_end(&c, NULL);
+    Py_ssize_t n = SHAPE(b[0], 0), R = SHAPE(b[1], 0);
     if (need(SHAPE(b[2], 0) == R && SHAPE(b[3], 0) == R && SHAPE(b[4], 0) == R &&
-                 SHAPE(b[4], 1) == L,
+                 SHAPE(b[4], 1) == SHAPE(b[3], 1),
              "oa, key, t and pbits: rows differ") ||
         need(SHAPE(b[5], 0) >= n, "new: one entry per entry of order") ||
         check_range(start, end, n))
-        goto done;
-    {
-        const int64_t *order = (const int64_t *)b[0].b.buf, *oa = (const int64_t *)b[1].b.buf;
-        const uint64_t *key = (const uint64_t *)b[2].b.buf;
-        const int64_t *pb = (const int64_t *)b[4].b.buf;
-        const char *t = DATA(b[3]);
-        Py_ssize_t isz = b[3].b.itemsize;
-        char *newp = DATA(b[5]);
-        int collision = 0;
-        Py_BEGIN_ALLOW_THREADS
-        for (Py_ssize_t i = start; i < end; i++) {
-            int64_t a = order[i];
-            if ((uint64_t)a >= (uint64_t)R) {
-                BAD_INDEX(&e, "order", 1, i, 0, 0, a, R);
-                break;
-            }
-            if (i == 0) {
-                newp[i] = 1;
-                continue;
-            }
-            int64_t c = order[i - 1];
-            if ((uint64_t)c >= (uint64_t)R) {
-                BAD_INDEX(&e, "order", 1, i - 1, 0, 0, c, R);
-                break;
-            }
-            if (oa[a] != oa[c] || key[a] != key[c]) {
-                newp[i] = 1;
-                continue;
-            }
-            int same = memcmp(t + (size_t)a * L * isz, t + (size_t)c * L * isz,
-                              (size_t)(L * isz)) == 0 &&
-                       memcmp(pb + (size_t)a * L, pb + (size_t)c * L,
-                              (size_t)L * sizeof(int64_t)) == 0;
-            newp[i] = !same;
-            if (!same)
-                collision = 1;
-        }
-        Py_END_ALLOW_THREADS
-        if (!e.type)
-            res = PyBool_FromLong(collision);
+        return call_end(&c, NULL);
+    int collision;
+    Py_BEGIN_ALLOW_THREADS
+    collision = groups_range(b, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, collision < 0 ? NULL : PyBool_FromLong(collision));
+}
+
+#define STARTS_WHY                                                                         \
+    "does not start or end a group: starts must be increasing within [0, len(order)] (no "  \
+    "group empty)"
+
+/* groups [start, end) of b = order, starts, reward, owner, action, t, p, group, red, g_owner,
+ * g_action, g_t, g_p (see merge_groups_doc) */
+/* groups [start, end): GET(X, I) and PUT(X, I, V) read owner and t, write g_owner and g_t */
+#define MERGE_LOOP(GET, PUT)                                                               \
+    for (Py_ssize_t g = start; g < end; g++) {                                             \
+        int64_t lo = starts[g], hi = starts[g + 1];                                        \
+        if (lo < 0)                                                                        \
+            return bad(e, PyExc_ValueError, "starts", 1, g, 0, 0, lo, 0, STARTS_WHY);      \
+        if (hi <= lo || hi > n)                                                            \
+            return bad(e, PyExc_ValueError, "starts", 1, g + 1, 0, 0, hi, 0, STARTS_WHY);  \
+        int64_t first = order[lo];                                                         \
+        if ((uint64_t)first >= (uint64_t)R)                                                \
+            return BAD_INDEX(e, "order", 1, (Py_ssize_t)lo, 0, 0, first, R);               \
+        double best = reward[first];                                                       \
+        for (int64_t k = lo; k < hi; k++) { /* the first row attaining the extreme */      \
+            int64_t r = order[k];                                                          \
+            if ((uint64_t)r >= (uint64_t)R)                                                \
+                return BAD_INDEX(e, "order", 1, (Py_ssize_t)k, 0, 0, r, R);                \
+            group[r] = g;                                                                  \
+            if (use_max ? reward[r] > best : reward[r] < best)                             \
+                best = reward[r];                                                          \
+        }                                                                                  \
+        red[g] = best;                                                                     \
+        PUT(g_owner, g, GET(owner, first));                                                \
+        ST(g_action, g, LD(action, first));                                                \
+        for (Py_ssize_t l = 0; l < L; l++) {                                               \
+            PUT(g_t, g * L + l, GET(t, first * L + l));                                    \
+            gp[g * L + l] = p[first * L + l];                                              \
+        }                                                                                  \
     }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 6);
-    return res;
+#define GET_32(X, I) ((const int32_t *)(X).p)[I]
+#define PUT_32(X, I, V) ((int32_t *)(X).p)[I] = (V)
+#define GET_64(X, I) ((const int64_t *)(X).p)[I]
+#define PUT_64(X, I, V) ((int64_t *)(X).p)[I] = (V)
+
+/* groups [start, end) of b = order, starts, reward, owner, action, t, p, group, red, g_owner,
+ * g_action, g_t, g_p (see merge_groups_doc) */
+static int merge_range(const Buf *b, int use_max, Py_ssize_t start, Py_ssize_t end, Bad *e) {
+    const int64_t *order = (const int64_t *)b[0].b.buf, *starts = (const int64_t *)b[1].b.buf;
+    const double *reward = (const double *)b[2].b.buf, *p = (const double *)b[6].b.buf;
+    int64_t *group = (int64_t *)b[7].b.buf;
+    double *red = (double *)b[8].b.buf, *gp = (double *)b[12].b.buf;
+    Ix owner = ix(&b[3]), action = ix(&b[4]), t = ix(&b[5]);
+    Ix g_owner = ix(&b[9]), g_action = ix(&b[10]), g_t = ix(&b[11]);
+    Py_ssize_t n = SHAPE(b[0], 0), R = SHAPE(b[2], 0), L = SHAPE(b[5], 1);
+    /* g_owner and g_t have the types of owner and t (merge_groups checks) */
+    if (owner.size == 4 && t.size == 4) {
+        MERGE_LOOP(GET_32, PUT_32)
+    } else if (owner.size == 8 && t.size == 8) {
+        MERGE_LOOP(GET_64, PUT_64)
+    } else {
+        MERGE_LOOP(LD, ST)
+    }
+    return 0;
 }
 
 PyDoc_STRVAR(merge_groups_doc,
@@ -1477,45 +1577,6 @@ PyDoc_STRVAR(merge_groups_doc,
              "and the group's representative, its first row: g_owner, g_action, g_t, g_p. "
              "Releases the GIL.");
 
-#define STARTS_WHY                                                                         \
-    "does not start or end a group: starts must be increasing within [0, len(order)] (no "  \
-    "group empty)"
-
-static int merge_range(Buf *b, int use_max, Py_ssize_t start, Py_ssize_t end, Bad *e) {
-    /* b: order, starts, reward, owner, action, t, p, group, red, g_owner, g_action, g_t, g_p */
-    const int64_t *order = (const int64_t *)b[0].b.buf, *starts = (const int64_t *)b[1].b.buf;
-    const double *reward = (const double *)b[2].b.buf, *p = (const double *)b[6].b.buf;
-    int64_t *group = (int64_t *)b[7].b.buf;
-    double *red = (double *)b[8].b.buf, *gp = (double *)b[12].b.buf;
-    Py_ssize_t n = SHAPE(b[0], 0), R = SHAPE(b[2], 0), L = SHAPE(b[5], 1);
-    Py_ssize_t osz = b[3].b.itemsize, asz = b[4].b.itemsize, tsz = b[5].b.itemsize;
-    for (Py_ssize_t g = start; g < end; g++) {
-        int64_t lo = starts[g], hi = starts[g + 1];
-        if (lo < 0)
-            return bad(e, PyExc_ValueError, "starts", 1, g, 0, 0, lo, 0, STARTS_WHY);
-        if (hi <= lo || hi > n)
-            return bad(e, PyExc_ValueError, "starts", 1, g + 1, 0, 0, hi, 0, STARTS_WHY);
-        for (int64_t k = lo; k < hi; k++)
-            if ((uint64_t)order[k] >= (uint64_t)R)
-                return BAD_INDEX(e, "order", 1, (Py_ssize_t)k, 0, 0, order[k], R);
-        int64_t first = order[lo];
-        double best = reward[first];
-        for (int64_t k = lo; k < hi; k++) {
-            int64_t r = order[k];
-            group[r] = g;
-            if (use_max ? reward[r] > best : reward[r] < best)
-                best = reward[r];
-        }
-        red[g] = best;
-        memcpy(DATA(b[9]) + g * osz, DATA(b[3]) + first * osz, (size_t)osz);
-        memcpy(DATA(b[10]) + g * asz, DATA(b[4]) + first * asz, (size_t)asz);
-        memcpy(DATA(b[11]) + (size_t)g * L * tsz, DATA(b[5]) + (size_t)first * L * tsz,
-               (size_t)(L * tsz));
-        memcpy(gp + (size_t)g * L, p + (size_t)first * L, (size_t)L * sizeof(double));
-    }
-    return 0;
-}
-
 static PyObject *merge_groups(PyObject *self, PyObject *args) {
     PyObject *o[13];
     int use_max;
@@ -1523,11 +1584,9 @@ static PyObject *merge_groups(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "OOOpOOOOOOOOOOnn", &o[0], &o[1], &o[2], &use_max, &o[3], &o[4],
                           &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11], &o[12], &start, &end))
         return NULL;
-    Buf b[13];
-    memset(b, 0, sizeof b);
-    PyObject *res = NULL;
-    Bad e;
-    e.type = NULL;
+    Call c;
+    call_init(&c);
+    Buf *b = c.b;
     if (get(o[0], &b[0], "order", 1, K_I, 8, 0, 0) ||
         get(o[1], &b[1], "starts", 1, K_I, 8, 0, 0) ||
         get(o[2], &b[2], "reward", 1, K_F, 8, 0, 0) ||
@@ -1539,7 +1598,7 @@ static PyObject *merge_groups(PyObject *self, PyObject *args) {
         get(o[10], &b[10], "g_action", 1, b[4].kind, (int)b[4].b.itemsize, 1, 0) ||
         get(o[11], &b[11], "g_t", 2, b[5].kind, (int)b[5].b.itemsize, 1, 0) ||
         get(o[12], &b[12], "g_p", 2, K_F, 8, 1, 0))
-        goto done;
+        return call_end(&c, NULL);
     Py_ssize_t R = SHAPE(b[2], 0), G = SHAPE(b[1], 0) - 1, L = SHAPE(b[5], 1);
     if (need(G >= 0, "starts: empty (it has one entry more than the groups)") ||
         need(SHAPE(b[3], 0) == R && SHAPE(b[4], 0) == R && SHAPE(b[5], 0) == R &&
@@ -1550,22 +1609,12 @@ static PyObject *merge_groups(PyObject *self, PyObject *args) {
                  SHAPE(b[12], 1) == L,
              "red, g_owner, g_action, g_t and g_p need one entry (row) per group") ||
         check_range(start, end, G))
-        goto done;
-    {
-        int failed;
-        Py_BEGIN_ALLOW_THREADS
-        failed = merge_range(b, use_max, start, end, &e);
-        Py_END_ALLOW_THREADS
-        if (!failed) {
-            res = Py_None;
-            Py_INCREF(res);
-        }
-    }
-done:
-    if (e.type && !PyErr_Occurred())
-        raise_bad(&e);
-    release(b, 13);
-    return res;
+        return call_end(&c, NULL);
+    int failed;
+    Py_BEGIN_ALLOW_THREADS
+    failed = merge_range(b, use_max, start, end, &c.e);
+    Py_END_ALLOW_THREADS
+    return call_end(&c, failed ? NULL : none());
 }
 
 /* ------------------------------------------------------------------------------ module */
