@@ -44,7 +44,7 @@ from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol.params import PatrolParams
 p = params_from_instance(load_instance("patrol-paper"))
-warm = PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=11)  # above SMALL_READS: compiles
+warm = PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=11)  # loads every kernel once
 if "{path}" == "array":
     from lpbounds import solve_exact
     from lpbounds.patrol.model import PatrolModel

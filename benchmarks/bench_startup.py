@@ -6,7 +6,7 @@ Targets: ``lpbounds --help`` and every ``lpbounds SUBCOMMAND --help`` within
 of a small model with an empty numba cache within 3 s. Writes the ``startup`` section of
 docs/benchmarks.md.
 
-    python benchmarks/bench_startup.py [--repeat 7] [--no-compiled] [--no-write]
+    python benchmarks/bench_startup.py [--repeat 7] [--no-write]
 """
 
 from __future__ import annotations
@@ -50,11 +50,6 @@ dp = lb.solve_exact(mdp)
 res = RLP(mdp, lb.random_partition(300, 30, seed=11)).solve("HIGHS", verbose=False)
 assert res.values is not None and dp.error_bound <= 1e-7
 """
-
-#: The same without the numpy twins: what a first solve cost before (every kernel compiles).
-GARNET_COMPILED = (
-    "from lpbounds._kernels import dispatch as _backend\n_backend.SMALL_READS = 0\n" + GARNET_RLP
-)
 
 
 def lpbounds_command() -> list[str]:
@@ -109,7 +104,6 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--cold-repeat", type=int, default=3)
-    ap.add_argument("--no-compiled", action="store_true", help="skip the ~20 s compiled run")
     ap.add_argument("--no-write", action="store_true", help="print only")
     args = ap.parse_args()
     load_before = load_average()
@@ -141,9 +135,6 @@ def main() -> None:
     for name, code in cold_rows:
         med, worst = cold(code, args.cold_repeat)
         add(f"cold: {name}", med, f"<= {FIRST_SOLVE_TARGET}: {_met(worst <= FIRST_SOLVE_TARGET)}")
-    if not args.no_compiled:
-        med, _ = cold(GARNET_COMPILED, 1)
-        add("cold, compiled kernels forced (the old path)", med, "")
     load_after = load_average()
     print(f"machine: {machine()}\ndate: {today()}\nload average: {load_before} -> {load_after}")
     if not args.no_write:
@@ -175,13 +166,10 @@ first run in a fresh environment (the target is checked on the slowest of them).
 
 `import lpbounds` loads its public names on first use (PEP 562), so it costs less than
 numpy; the subcommands import numpy, cvxpy, matplotlib and the models inside their `run`.
-Models that read fewer than `lpbounds._kernels.dispatch.SMALL_READS` (200,000) values per Bellman
-sweep run on numpy twins of the compiled kernels (same numbers, bit for bit:
-`tests/test_fast_paths.py`), so a first solve compiles nothing; the last row is the same
-script with the compiled kernels forced, which is what every first solve cost before. Of
-the compiled kernels, exact DP's row sweeps are C, built at install, and compile nothing
-(the last row was 21.8 s while they were numba's); the others (the RLP's aggregation
-here) are numba's: they compile on first use and say so on stderr, with an estimate.
+Every Bellman-row kernel (exact DP's sweeps, the RLP's aggregation here, the NLP's game
+operator, the post-decision form) is C, built at install, at every model size, so a first
+solve compiles nothing (a first solve with the kernels forced to numba's took 21.8 s while
+they were; `benchmarks/bench_kernels.py` times a cold first RLP of a larger model on both).
 """
 
 

@@ -931,8 +931,8 @@ class _Collect(logging.Handler):
 def run_task_in_worker(task: Task) -> tuple[list[dict[str, Any]], list[LogLine]]:
     """:func:`run_task` in a worker process, returning its ``lpbounds`` log records (WARNING
     and above) instead of printing them: a worker writing to the terminal itself would
-    write into the parent's progress display, and every worker would repeat a notice (the
-    numba compile notice, once per worker). The parent logs each distinct record once."""
+    write into the parent's progress display, and every worker would repeat a notice (once
+    per worker). The parent logs each distinct record once."""
     logger = logging.getLogger("lpbounds")
     handler = _Collect()
     saved = logger.propagate
