@@ -84,10 +84,16 @@ def best(f: Callable[[], Any], reps: int) -> float:
     return min(ts)
 
 
+#: seconds of calls each side of a comparison gets at least (fast kernels: many calls, so
+#: that the best of them is not a call the loaded machine descheduled)
+BUDGET = 1.0
+
+
 def side_by_side(c: Callable[[], Any], other: Callable[[], Any], reps: int) -> tuple[float, float]:
-    """Best seconds of ``c`` and ``other``, warmed once each, then timed alternately."""
-    c()
-    other()
+    """Best seconds of ``c`` and ``other``, warmed once each, then timed alternately: at
+    least ``reps`` calls each, more (up to 400) when a call is short (:data:`BUDGET`)."""
+    once = max(best(c, 1), best(other, 1), 1e-6)
+    reps = max(reps, min(400, int(BUDGET / once)))
     tc, to = [], []
     for _ in range(reps):
         tc.append(best(c, 1))
@@ -227,11 +233,31 @@ def row_calls(kern: ModuleType, rows: BellmanRows) -> dict[str, Callable]:
 
 
 def compare(group: str, c_calls: dict, o_calls: dict, reps: int, rows: list) -> None:
+    """Each kernel of a group side by side on the threads set now; a row each into ``rows``."""
+    k = threads.get_threads()
     for name in c_calls:
         tc, to = side_by_side(c_calls[name], o_calls[name], reps)
-        rows.append((group, name, tc, to))
-        print(f"{group:38s} {name:36s} C {tc * 1e3:9.2f} ms  other {to * 1e3:9.2f} ms  "
-              f"{to / tc:6.2f}x", flush=True)  # fmt: skip
+        rows.append((group, name, k, tc, to))
+        print(
+            f"{group:38s} {name:36s} {k} thr C {tc * 1e3:9.2f} ms  other {to * 1e3:9.2f} ms  "
+            f"{to / tc:6.2f}x",
+            flush=True,
+        )
+
+
+def compare_threads(group: str, calls: tuple[dict, dict], reps: int, rows: list) -> None:
+    """:func:`compare` on all threads and on one, numba's and the C pool's alike."""
+    import numba
+
+    many = threads.get_threads()
+    try:
+        for k in sorted({many, 1}, reverse=True):
+            threads.set_threads(k)
+            numba.set_num_threads(k)
+            compare(group, *calls, reps, rows)
+    finally:
+        threads.set_threads(many)
+        numba.set_num_threads(many)
 
 
 # ---------------------------------------------------------------------- cold processes
@@ -265,8 +291,8 @@ def main() -> None:
     ap.add_argument("--no-write", action="store_true", help="print only")
     args = ap.parse_args()
     load_before = load_average()
-    rows: list[tuple[str, str, float, float]] = []
-    tiny: list[tuple[str, str, float, float]] = []
+    rows: list[tuple[str, str, int, float, float]] = []
+    tiny: list[tuple[str, str, int, float, float]] = []
     cold: list[tuple[str, float, float]] = []
     # 2. C against the numpy twins at the sizes the twins ran
     for n in (3, 300, 3_000):
@@ -274,13 +300,13 @@ def main() -> None:
         part = random_partition(n, max(1, n // 10), seed=2)
         low = BellmanRows.aggregate(mdp, part, reduce="min")
         label = f"garnet {n:,} x 3 x 4, M = {part.n_partitions:,}"
-        compare(label, row_calls(C, low), row_calls(T, low), args.repeat * 4, tiny)
+        compare(label, row_calls(C, low), row_calls(T, low), args.repeat, tiny)
         tc, tt = side_by_side(
             lambda m=mdp, p=part: BellmanRows.aggregate(m, p),
             lambda m=mdp, p=part: _on_twins(lambda: BellmanRows.aggregate(m, p)),
-            args.repeat * 4,
+            args.repeat,
         )
-        tiny.append((label, "BellmanRows.aggregate", tc, tt))
+        tiny.append((label, "BellmanRows.aggregate", threads.get_threads(), tc, tt))
         print(f"{label:38s} {'aggregate':36s} C {tc * 1e3:9.2f} ms  twins {tt * 1e3:9.2f} ms")
     if args.old_src is not None:
         numba_rows, numba_agg = load_numba(args.old_src)
@@ -288,18 +314,20 @@ def main() -> None:
         mdp = garnet(100_000, 3, 5, 0.9, seed=1)
         part = random_partition(100_000, 10_000, seed=2)
         group = "aggregation, garnet 100,000 x 3 x 5, M = 10,000"
-        compare(group, *aggregation_calls(numba_agg, mdp, part), args.repeat, rows)
+        compare_threads(group, aggregation_calls(numba_agg, mdp, part), args.repeat, rows)
         low = BellmanRows.aggregate(mdp, part, reduce="min")
         group = f"NLP rows of that garnet ({low.n_rows:,} x 5)"
-        compare(group, row_calls(C, low), row_calls(numba_rows, low), args.repeat, rows)
-        del mdp, part, low
+        calls = (row_calls(C, low), row_calls(numba_rows, low))
+        compare_threads(group, calls, args.repeat, rows)
+        del mdp, part, low, calls
         inst = load_instance("patrol-paper")
         mdp = inst.mdp()
         group = "post-decision form, patrol-paper (2,048,000)"
-        compare(group, *post_decision_calls(numba_rows, mdp), args.repeat, rows)
+        compare_threads(group, post_decision_calls(numba_rows, mdp), args.repeat, rows)
         group = "aggregation, patrol-paper, M = 8,900"
-        compare(group, *aggregation_calls(numba_agg, mdp, inst.partition()), args.repeat, rows)
-        del mdp
+        calls = aggregation_calls(numba_agg, mdp, inst.partition())
+        compare_threads(group, calls, args.repeat, rows)
+        del mdp, calls
         # 3. a cold first RLP, alternating the trees
         before, after = [], []
         for _ in range(args.cold_repeat):
@@ -332,30 +360,32 @@ def _on_twins(func: Callable[[], Any]) -> Any:
 def _section(rows, tiny, cold, args, load_before, load_after) -> str:
     def table(items, other: str) -> str:
         head = (
-            f"| operation | kernel | C (ms) | {other} (ms) | {other} / C |\n|---|---|---|---|---|\n"
+            f"| operation | kernel | threads | C (ms) | {other} (ms) | {other} / C |\n"
+            "|---|---|---|---|---|---|\n"
         )
         return head + "\n".join(
-            f"| {g} | `{k}` | {tc * 1e3:.2f} | {to * 1e3:.2f} | **{to / tc:.2f}** |"
-            for g, k, tc, to in items
+            f"| {g} | `{k}` | {n} | {tc * 1e3:.2f} | {to * 1e3:.2f} | **{to / tc:.2f}** |"
+            for g, k, n, tc, to in items
         )
 
     parts = [
         "## Kernels: C against the numba kernels it replaced (benchmarks/bench_kernels.py)",
         "",
         f"Machine: {machine()}. Date: {today()}. Load average (1, 5, 15 min) before and "
-        f"after: {load_before} -> {load_after}. Threads: {threads.get_threads()} (numba's "
-        "and the C pool's). Each figure is the best of "
-        f"{args.repeat} calls after one warm-up call (numba's on-disk cache filled), C and "
-        "numba alternating on the same inputs; numba's kernels are those of the tree "
-        "before the move (`--old-src`).",
+        f"after: {load_before} -> {load_after}. Each figure is the best of at least "
+        f"{args.repeat} calls (as many as fill {BUDGET:.0f} s, up to 400) after one warm-up "
+        "call each (numba's on-disk cache filled), C and numba alternating on the same "
+        "inputs, on all threads and on one (numba's count and the C pool's set alike); "
+        "numba's kernels are those of the tree before the move (`--old-src`). On a loaded "
+        "machine the one-thread rows are the steadier comparison.",
         "",
     ]
     if rows:
         parts += [table(rows, "numba"), ""]
     parts += [
         "The C kernels against their numpy twins on the small models the twins ran before "
-        f"(below 200,000 values read per sweep; best of {args.repeat * 4}): the twins lose at "
-        "every size, so every model runs on C and the twins are the tests' reference only.",
+        "(below 200,000 values read per sweep; timed the same way): the twins lose at every "
+        "size, so every model runs on C and the twins are the tests' reference only.",
         "",
         table(tiny, "twins"),
         "",
