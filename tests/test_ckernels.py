@@ -244,6 +244,38 @@ def test_property_post_decision_sweeps_equal_twins(
     assert same(out_c, out_t) and sc == st_
 
 
+def test_no_action_gives_minus_inf_and_no_row(threads):
+    """act = -1, what the max sweep writes where no action beats -inf (overflowing iterates):
+    the policy sweep gives -inf there and the row map -1, as the twins do, so a solve that
+    overflows ends in its ConvergenceError (tests/test_dp.py); other bad actions raise."""
+    rng = np.random.default_rng(4)
+    succ, allowed = post_decision(rng, 30, 3, 2, np.int32, 0.7)
+    _, _, outcomes, first = post_form(T, succ, allowed, np.int32)
+    act = np.array([rng.choice(np.flatnonzero(allowed[x])) for x in range(30)], dtype=np.int8)
+    act[[0, 17]] = -1
+    reward, w, v = rng.normal(size=(30, 3)), rng.normal(size=outcomes.shape[0]), np.zeros(30)
+    got, want = np.empty(30), np.empty(30)
+    sc = C.ps_policy_stats(first, reward, act, w, 0.9, v, got)
+    st_ = T.ps_policy_stats(first, reward, act, w, 0.9, v, want)
+    assert same(got, want) and sc == st_ and got[17] == -np.inf and sc[0] == -np.inf
+    code, table = np.empty((30, 3), np.uint8), np.empty(90)
+    count = C.reward_codes(reward, 90, code, table)
+    sc = C.ps_policy_stats_coded(first, code, table[:count], act, w, 0.9, v, got)
+    st_ = T.ps_policy_stats_coded(first, code, table[:count], act, w, 0.9, v, want)
+    assert same(got, want) and sc == st_
+    row_start = np.zeros(30, dtype=np.int64)
+    np.cumsum(allowed.sum(axis=1)[:-1], out=row_start[1:])
+    rc, rt = np.empty(30, np.int64), np.empty(30, np.int64)
+    C.ps_rows(allowed, row_start, act, rc)
+    T.ps_rows(allowed, row_start, act, rt)
+    assert same(rc, rt) and rc[0] == rc[17] == -1
+    act[5] = -2
+    with pytest.raises(IndexError, match=r"act\[5\] = -2 is outside \[0, 3\)"):
+        C.ps_policy_stats(first, reward, act, w, 0.9, v, got)
+    with pytest.raises(IndexError, match=r"act\[5\] = -2"):
+        C.ps_rows(allowed, row_start, act, rc)
+
+
 @SETTINGS
 @given(
     n=st.integers(0, 40), n_act=st.integers(1, 4), distinct=st.integers(1, 300),

@@ -175,8 +175,9 @@ def ps_max_stats(
 def ps_policy_stats(
     first: Any, reward: Any, act: Any, w: Any, discount: float, v: Any, out: np.ndarray
 ) -> tuple[float, float]:
-    """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``; returns the
-    min and max of ``out - v``."""
+    """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``, ``-inf``
+    where ``a = -1`` (no action: :func:`ps_max_stats`' ``arg`` where none beats ``-inf``);
+    returns the min and max of ``out - v``."""
     first = _c_order(first)
     args = (first, _f8(reward), _c_order(act), _f8(w), float(discount), _f8(v), out)
     return _extremes(run_ranges(_c.ps_policy_stats, args, _bounds(first.shape[0], first.shape[0])))
@@ -207,7 +208,8 @@ def ps_policy_stats_coded(
 
 
 def ps_rows(allowed: Any, row_start: Any, act: Any, out: np.ndarray) -> None:
-    """Row index (of :meth:`BellmanRows.from_mdp`) of the pair ``(x, act[x])``."""
+    """Row index (of :meth:`BellmanRows.from_mdp`) of the pair ``(x, act[x])``; -1 where
+    ``act[x] = -1`` (no action)."""
     allowed = np.ascontiguousarray(allowed, dtype=np.bool_)
     args = (allowed, _i8(row_start), _c_order(act), out)
     run_ranges(_c.ps_rows, args, _bounds(allowed.shape[0], allowed.size))

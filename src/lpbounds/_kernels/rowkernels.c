@@ -842,13 +842,19 @@ typedef struct {
         return 0;                                                                          \
     }
 
-/* states [start, end): out[i] = reward(i, a) + lam w[first[i, a]] with a = act[i] (arg) */
+/* states [start, end): out[i] = reward(i, a) + lam w[first[i, a]] with a = act[i] (arg),
+ * -inf where a = -1 */
 #define DEF_PS_POLICY(SUF, TF, TC, REWARD)                                                 \
     static int ps_policy_##SUF(const Post *ps, Py_ssize_t start, Py_ssize_t end, double *lo, \
                                double *hi, Bad *e) {                                       \
         POST_LOCALS(TF, TC);                                                               \
         for (Py_ssize_t i = start; i < end; i++) {                                         \
             int64_t a = LD(arg, i);                                                        \
+            if (a == -1) { /* no action (the max sweep's arg where none beats -inf) */     \
+                out[i] = -INFINITY;                                                        \
+                EXTREMES(-INFINITY - v[i]);                                                \
+                continue;                                                                  \
+            }                                                                              \
             if ((uint64_t)a >= (uint64_t)A)                                                \
                 return BAD_INDEX(e, "act", 1, i, 0, 0, a, A);                              \
             int64_t k = (int64_t)first[i * A + a];                                         \
@@ -969,8 +975,9 @@ static PyObject *ps_max_stats(PyObject *self, PyObject *args) { return post_swee
 PyDoc_STRVAR(ps_policy_stats_doc,
              "ps_policy_stats(first, reward, act, w, discount, v, out, start, end) -> (lo, hi)\n\n"
              "For states start <= x < end: out[x] = reward[x, a] + discount w[first[x, a]] with "
-             "a = act[x]; returns the min and max of out - v. IndexError for an action outside "
-             "[0, A) or not allowed (first = -1). Releases the GIL.");
+             "a = act[x], -inf where act[x] = -1 (no action: ps_max_stats' arg where no action "
+             "beats -inf); returns the min and max of out - v. IndexError for another action "
+             "outside [0, A) or one not allowed (first = -1). Releases the GIL.");
 static PyObject *ps_policy_stats(PyObject *self, PyObject *args) {
     return post_sweep(args, 1, 0);
 }
@@ -989,10 +996,14 @@ static PyObject *ps_policy_stats_coded(PyObject *self, PyObject *args) {
     return post_sweep(args, 1, 1);
 }
 
-/* states [start, end): out[x] = rs[x] + allowed actions below a = GET(x) */
+/* states [start, end): out[x] = rs[x] + allowed actions below a = GET(x); -1 where a = -1 */
 #define ROWS_LOOP(GET)                                                                     \
     for (Py_ssize_t x = start; x < end; x++) {                                             \
         int64_t a = GET(x);                                                                \
+        if (a == -1) { /* no action: no row */                                             \
+            out[x] = -1;                                                                   \
+            continue;                                                                      \
+        }                                                                                  \
         if ((uint64_t)a >= (uint64_t)A)                                                    \
             return BAD_INDEX(e, "act", 1, x, 0, 0, a, A);                                  \
         int64_t r = rs[x];                                                                 \
@@ -1024,7 +1035,8 @@ static int rows_range(const Buf *b, Py_ssize_t start, Py_ssize_t end, Bad *e) {
 PyDoc_STRVAR(ps_rows_doc,
              "ps_rows(allowed, row_start, act, out, start, end)\n\nFor states start <= x < end: "
              "out[x] = row_start[x] + the number of allowed actions below act[x] (the row of "
-             "the pair (x, act[x]) in BellmanRows.from_mdp). Releases the GIL.");
+             "the pair (x, act[x]) in BellmanRows.from_mdp), -1 where act[x] = -1 (no action). "
+             "Releases the GIL.");
 
 static PyObject *ps_rows(PyObject *self, PyObject *args) {
     PyObject *o_a, *o_rs, *o_act, *o_out;

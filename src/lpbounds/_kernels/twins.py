@@ -202,16 +202,23 @@ def ps_max_stats(first, reward, w, discount, v, out, arg):
 
 
 def ps_policy_stats(first, reward, act, w, discount, v, out):
-    """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``."""
+    """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``; ``-inf``
+    where ``a = -1`` (no action: :func:`ps_max_stats`' arg where none beats ``-inf``)."""
     x = np.arange(first.shape[0])
-    return _ps_policy(reward[x, act] + discount * w[first[x, act]], v, out)
+    return _ps_policy(_no_action(act, reward[x, act] + discount * w[first[x, act]]), v, out)
+
+
+def _no_action(act, q: np.ndarray) -> np.ndarray:
+    """``q`` with ``-inf`` where ``act`` is -1 (its entries there read the last action)."""
+    return np.where(np.asarray(act) == -1, -_INF, q)
 
 
 def ps_rows(allowed, row_start, act, out):
-    """Row index (of :meth:`BellmanRows.from_mdp`) of the pair ``(x, act[x])``."""
+    """Row index (of :meth:`BellmanRows.from_mdp`) of the pair ``(x, act[x])``; -1 where
+    ``act[x] = -1`` (no action)."""
     act = np.asarray(act, dtype=np.int64)
     before = np.cumsum(allowed, axis=1) - allowed  # allowed actions below each action
-    out[:] = row_start + before[np.arange(act.shape[0]), act]
+    out[:] = np.where(act == -1, -1, row_start + before[np.arange(act.shape[0]), act])
 
 
 def reward_codes(reward, max_codes, codes, table):
@@ -238,7 +245,7 @@ def ps_max_stats_coded(first, codes, table, w, discount, v, out, arg):
 def ps_policy_stats_coded(first, codes, table, act, w, discount, v, out):
     """:func:`ps_policy_stats` with rewards ``table[codes[x, u]]``."""
     x = np.arange(first.shape[0])
-    return _ps_policy(table[codes[x, act]] + discount * w[first[x, act]], v, out)
+    return _ps_policy(_no_action(act, table[codes[x, act]] + discount * w[first[x, act]]), v, out)
 
 
 # ---------------------------------------------------------------------- aggregation
