@@ -5,15 +5,14 @@ says why they are not numba's). ``lpbounds._kernels.patrolsweeps``: the patrol's
 matrix-free sweeps and passes, its encoding and partition key (``lpbounds.patrol.sweeps``);
 ``lpbounds._kernels.patrolmc``: the greedy policy on the fly, its Monte Carlo returns and
 the simulator of Table 1 (``lpbounds.patrol.greedy_mc``, ``.simulation``); both include
-``patrol.h``. No numpy headers (the buffer protocol). ``-ffp-contract=off``: no fused
-multiply-add, so the numbers are bit-identical to the numpy twins' on every CPU (gcc
-contracts ``a * b + c`` by default where the CPU has FMA).
-"""
+``patrol.h`` and ``buffers.h``. No numpy headers (the buffer protocol).
+``-ffp-contract=off``: no fused multiply-add, so the numbers are bit-identical to the numpy
+twins' on every CPU (gcc contracts ``a * b + c`` by default where the CPU has FMA)."""
 
 from setuptools import Extension, setup
 
 C_ARGS = ["-O3", "-ffp-contract=off", "-std=c99"]
-PATROL_H = ["src/lpbounds/_kernels/patrol.h"]
+PATROL_H = ["src/lpbounds/_kernels/patrol.h", "src/lpbounds/_kernels/buffers.h"]
 
 setup(
     ext_modules=[

@@ -49,8 +49,9 @@ MODELS = (
 )
 #: small enough for policy iteration with direct evaluation
 PI_MODELS = ("cliffwalking", "forest", "frozenlake", "gridworld", "inventory", "queue", "savings")
-#: summary.json keys that hold timings or describe the machine (not numbers of the method)
-VOLATILE = {"timing", "machine", "seconds", "cpu_seconds", "peak_rss_mb", "elapsed", "created"}
+#: summary.json keys that hold timings, dates or the machine (not numbers of the method):
+#: these names, and every key containing "seconds"
+VOLATILE = {"timing", "machine", "date", "peak_rss_mb", "elapsed", "created"}
 
 
 def digest(*arrays: Any) -> str:
@@ -65,7 +66,7 @@ def digest(*arrays: Any) -> str:
 
 def _strip(obj: Any) -> Any:
     if isinstance(obj, dict):
-        return {k: _strip(v) for k, v in obj.items() if k not in VOLATILE}
+        return {k: _strip(v) for k, v in obj.items() if k not in VOLATILE and "seconds" not in k}
     if isinstance(obj, list):
         return [_strip(v) for v in obj]
     return obj

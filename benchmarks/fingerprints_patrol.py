@@ -27,20 +27,11 @@ import sys
 from typing import Any
 
 import numpy as np
+from fingerprints import digest
 
 SEEDS = (1, 2)
 #: Monte Carlo size per start (the returns are hashed exactly, so a few hundred paths do)
 PATHS = 300
-
-
-def digest(*arrays: Any) -> str:
-    h = hashlib.sha256()
-    for a in arrays:
-        a = np.ascontiguousarray(a)
-        h.update(str(a.dtype).encode())
-        h.update(str(a.shape).encode())
-        h.update(a.tobytes())
-    return h.hexdigest()[:16]
 
 
 def digest_obj(obj: Any) -> str:
@@ -93,7 +84,11 @@ def matrix_free(name: str) -> None:
     out(name, "mf V_sub", digest(ev.values))
     out(name, "mf V_sub run", digest_obj([ev.sweeps, ev.residual, ev.error_bound]))
     out(name, "mf vsub stats", digest_obj(mf.vsub_stats(sol.values, ev.values, b.lower)))
-    out(name, "mf vsub stats (V* as V_sub)", digest_obj(mf.vsub_stats(sol.values, sol.values, b.upper)))
+    out(
+        name,
+        "mf vsub stats (V* as V_sub)",
+        digest_obj(mf.vsub_stats(sol.values, sol.values, b.upper)),
+    )
     v0 = np.zeros(mf.n_vars)
     o = mf.new_vector()
     arg = mf.new_arg()

@@ -243,30 +243,47 @@ static PyObject *greedy_actions(PyObject *self, PyObject *args) {
         out[i] = (int8_t)greedy_step(&mt, &bf, &r);
     }
     Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
+    res = Py_NewRef(Py_None);
 done:
     pbuf_release(b, MT_BUFS + 2);
     return res;
 }
 
-/* the discounted return of one path of H steps from x0 (greedy_mc._path_return) */
-static double path_return(const Mt *mt, int64_t x0, const int64_t *y, Py_ssize_t horizon,
-                          int cv, GBuf *bf) {
+/* One path of H steps from x0 under y: its discounted return (greedy_mc._path_return),
+ * minus (cv) the control variate; with states and actions (not NULL), the trajectory
+ * states[0..H], actions[0..H) (greedy_mc._trajectory_kernel). */
+static double path_run(const Mt *mt, int64_t x0, const int64_t *y, Py_ssize_t horizon, int cv,
+                       GBuf *bf, int64_t *states, int64_t *actions) {
     double lam = mt->discount;
     set_state(mt, x0, bf);
     double g = 0.0, disc = 1.0;
+    int64_t x = x0;
     for (Py_ssize_t t = 0; t < horizon; t++) {
         double r;
+        if (states)
+            states[t] = x;
         int a = greedy_step(mt, bf, &r);
+        if (actions)
+            actions[t] = a;
         int64_t yt = y[t];
         g += disc * r;
         if (cv)
             g -= disc * lam * (bf->wn[a][yt] - bf->ev[a]);
         disc *= lam;
-        advance_to(bf, a, yt, mt->pm.m);
+        x = advance_to(bf, a, yt, mt->pm.m);
     }
+    if (states)
+        states[horizon] = x;
     return g;
+}
+
+/* mt and lower into b[0..7], the outcomes (ndim dimensions) into b[8], x0 a state */
+static int open_paths(PyObject *o_mt, PyObject *o_lower, PyObject *o_y, int ndim, long long x0,
+                      PBuf *b, Mt *mt) {
+    if (load_mt(o_mt, o_lower, b, mt) || pbuf_get(o_y, &b[8], "outcomes", ndim, 'i', SZ8, 0) ||
+        state_ok(mt, x0, "x0", -1))
+        return -1;
+    return 0;
 }
 
 PyDoc_STRVAR(greedy_returns_doc,
@@ -286,24 +303,22 @@ static PyObject *greedy_returns(PyObject *self, PyObject *args) {
     memset(b, 0, sizeof b);
     Mt mt;
     PyObject *res = NULL;
-    if (load_mt(o_mt, o_lower, b, &mt) || pbuf_get(o_y, &b[8], "outcomes", 2, 'i', SZ8, 0) ||
+    if (open_paths(o_mt, o_lower, o_y, 2, x0, b, &mt) ||
         pbuf_get(o_out, &b[9], "out", 1, 'f', 0, 1) ||
         pbuf_shape(&b[9], "out", b[8].b.shape[0], -1) ||
-        range_ok(start, end, b[8].b.shape[0], "paths") || state_ok(&mt, x0, "x0", -1))
+        range_ok(start, end, b[8].b.shape[0], "paths") ||
+        outcomes_ok(b[8].b.buf, start * b[8].b.shape[1], end * b[8].b.shape[1], mt.pm.m))
         goto done;
     Py_ssize_t horizon = b[8].b.shape[1];
     const int64_t *y = b[8].b.buf;
-    if (outcomes_ok(y, start * horizon, end * horizon, mt.pm.m))
-        goto done;
     double *out = b[9].b.buf;
     Py_BEGIN_ALLOW_THREADS
     GBuf bf;
     memset(&bf, 0, sizeof bf);
     for (Py_ssize_t p = start; p < end; p++)
-        out[p] = path_return(&mt, x0, y + p * horizon, horizon, cv, &bf);
+        out[p] = path_run(&mt, x0, y + p * horizon, horizon, cv, &bf, NULL, NULL);
     Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
+    res = Py_NewRef(Py_None);
 done:
     pbuf_release(b, MT_BUFS + 2);
     return res;
@@ -323,33 +338,19 @@ static PyObject *greedy_trajectory(PyObject *self, PyObject *args) {
     memset(b, 0, sizeof b);
     Mt mt;
     PyObject *res = NULL;
-    if (load_mt(o_mt, o_lower, b, &mt) || pbuf_get(o_y, &b[8], "outcomes", 1, 'i', SZ8, 0) ||
+    if (open_paths(o_mt, o_lower, o_y, 1, x0, b, &mt) ||
         pbuf_get(o_states, &b[9], "states", 1, 'i', SZ8, 1) ||
         pbuf_get(o_actions, &b[10], "actions", 1, 'i', SZ8, 1) ||
         pbuf_shape(&b[9], "states", b[8].b.shape[0] + 1, -1) ||
-        pbuf_shape(&b[10], "actions", b[8].b.shape[0], -1) || state_ok(&mt, x0, "x0", -1))
+        pbuf_shape(&b[10], "actions", b[8].b.shape[0], -1) ||
+        outcomes_ok(b[8].b.buf, 0, b[8].b.shape[0], mt.pm.m))
         goto done;
-    Py_ssize_t n_steps = b[8].b.shape[0];
-    const int64_t *y = b[8].b.buf;
-    if (outcomes_ok(y, 0, n_steps, mt.pm.m))
-        goto done;
-    int64_t *states = b[9].b.buf, *actions = b[10].b.buf;
     Py_BEGIN_ALLOW_THREADS
     GBuf bf;
     memset(&bf, 0, sizeof bf);
-    set_state(&mt, x0, &bf);
-    int64_t x = x0;
-    for (Py_ssize_t t = 0; t < n_steps; t++) {
-        double r;
-        states[t] = x;
-        int a = greedy_step(&mt, &bf, &r);
-        actions[t] = a;
-        x = advance_to(&bf, a, y[t], mt.pm.m);
-    }
-    states[n_steps] = x;
+    path_run(&mt, x0, b[8].b.buf, b[8].b.shape[0], 0, &bf, b[9].b.buf, b[10].b.buf);
     Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
+    res = Py_NewRef(Py_None);
 done:
     pbuf_release(b, MT_BUFS + 3);
     return res;

@@ -434,6 +434,26 @@ static int chunks_ok(Py_ssize_t nchunks, Py_ssize_t c0, Py_ssize_t c1) {
 #define FOLD_MIN(acc, x) ((x) < (acc) ? (x) : (acc))
 #define FOLD_MAX(acc, x) ((x) > (acc) ? (x) : (acc))
 
+/* ------------------------------------------------------------------ opening a call */
+/* The geometry into b[0..3], the chunk range and the walk's buffers: 0, or -1 with the
+ * exception set. */
+static int open_walk(PyObject *const *o_geo, PBuf *b, Geo *g, Walk *wk, Py_ssize_t nchunks,
+                     Py_ssize_t c0, Py_ssize_t c1) {
+    wk->acc = NULL;
+    if (load_geo(o_geo[0], o_geo[1], o_geo[2], o_geo[3], b, g) || chunks_ok(nchunks, c0, c1))
+        return -1;
+    return walk_alloc(wk, g);
+}
+
+/* The end of a call: the walk's buffers and the arrays released; ``res`` or NULL. */
+static PyObject *close_walk(PyObject *res, Walk *wk, PBuf *b, int nb) {
+    free(wk->acc);
+    pbuf_release(b, nb);
+    return res;
+}
+
+#define MIN64(a, b) ((a) < (b) ? (a) : (b))
+
 /* ------------------------------------------------------------------ the sweeps */
 /* The max over the actions of the row of states x.. whose "continue" sums are qa and
  * "reverse" sums qb (sweeps._max_row). */
@@ -465,68 +485,22 @@ Py_LOCAL_INLINE(void) max_row(int64_t x, int64_t nb, const Row *rw, double inc_d
     }
 }
 
-PyDoc_STRVAR(max_sweep_doc,
-             "max_sweep(geo, planes, sp, weights, probs, inc, pent, discount, v, out, arg, "
-             "nchunks, c0, c1) -> (lo, hi)\n\n"
-             "out = T v on the chunks c0 <= c < c1 (the first maximising action in arg, int8);"
-             " returns the min and max of out - v over them. Releases the GIL.");
-
-static PyObject *max_sweep(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_p, *o_inc, *o_pent, *o_v, *o_out, *o_arg;
-    double lam;
-    Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOOOOdOOOnnn", &o_geo, &o_pl, &o_sp, &o_w, &o_p, &o_inc,
-                          &o_pent, &lam, &o_v, &o_out, &o_arg, &nchunks, &c0, &c1))
-        return NULL;
-    PBuf b[10];
-    memset(b, 0, sizeof b);
-    Geo geo;
-    Walk wk;
-    wk.acc = NULL;
-    PyObject *res = NULL;
-    const Geo *g = &geo;
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) || load_floats(o_p, o_inc, o_pent, b + 4, g) ||
-        pbuf_get(o_v, &b[7], "v", 1, 'f', 0, 0) || pbuf_get(o_out, &b[8], "out", 1, 'f', 0, 1) ||
-        pbuf_get(o_arg, &b[9], "arg", 1, 'i', SZ1, 1) ||
-        pbuf_shape(&b[7], "v", g->pm.n_states, -1) ||
-        pbuf_shape(&b[8], "out", g->pm.n_states, -1) ||
-        pbuf_shape(&b[9], "arg", g->pm.n_states, -1) || chunks_ok(nchunks, c0, c1) ||
-        walk_alloc(&wk, g))
-        goto done;
-    const double *probs = b[4].b.buf, *inc = b[5].b.buf, *pent = b[6].b.buf, *v = b[7].b.buf;
-    double *out = b[8].b.buf;
-    int8_t *arg = b[9].b.buf;
-    int64_t n_out = g->pm.m + 1, gamma = g->pm.gamma, R = g->pm.radix;
-    double lo = INFINITY, hi = -INFINITY;
-    Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1; c++) {
-        int64_t u, end, x, rm;
-        unit_chunk(g, nchunks, c, &u, &end, &x, &rm);
-        double lc = INFINITY, hc = -INFINITY;
-        int64_t plane = u < end ? cursor_at(g, x, wk.tau) : 0;
-        while (u < end) { /* whole rows: chunks start at row boundaries */
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = rw.length;
-            double inc_d = inc[PL(plane, P_D)];
-            row_sums(v, probs, n_out, &wk, nb, gamma, rw.loiter == NEVER ? 3 : 7);
-            const double *q0 = wk.acc, *q1 = wk.acc + R, *q2 = wk.acc + 2 * R;
-            max_row(x, nb, &rw, inc_d, pent, lam, q0, q1, q2, v, out, arg, &lc, &hc);
-            if (plane < 2 * g->pm.N) /* the (l, -1) twin: its moves swap the two sums */
-                max_row(x + rm, nb, &rw, inc_d, pent, lam, q1, q0, q2, v, out, arg, &lc, &hc);
-            u += nb;
-            x += nb;
-            if (u < end)
-                plane = next_row(g, plane, &wk, &x, rm);
-        }
-        lo = c == c0 ? lc : FOLD_MIN(lo, lc);
-        hi = c == c0 ? hc : FOLD_MAX(hi, hc);
+/* T_pi v on the row of states x.. (twin: an (l, -1) plane, whose moves swap the sums). */
+Py_LOCAL_INLINE(void) policy_row(int64_t x, int64_t nb, const Row *rw, double inc_d,
+                                 const double *pent, double lam, const int8_t *act,
+                                 const double *acc, int64_t R, int twin, const double *v,
+                                 double *out, double *lc, double *hc) {
+    for (int64_t t = 0; t < nb; t++) {
+        int64_t a = act[x + t];
+        double r = pent[t > rw->pmax ? t : rw->pmax];
+        if (a == 2)
+            r = r + inc_d;
+        double q = r + lam * acc[(twin && a < 2 ? 1 - a : a) * R + t];
+        out[x + t] = q;
+        double diff = q - v[x + t];
+        *lc = FOLD_MIN(*lc, diff);
+        *hc = FOLD_MAX(*hc, diff);
     }
-    Py_END_ALLOW_THREADS
-    res = Py_BuildValue("dd", lo, hi);
-done:
-    free(wk.acc);
-    pbuf_release(b, 10);
-    return res;
 }
 
 /* Bit a set if a state x.. of the row takes the action whose sum is acc[a] (twin: the
@@ -544,6 +518,97 @@ Py_LOCAL_INLINE(int64_t) used_actions(const int8_t *act, int64_t x, int64_t nb, 
     return used;
 }
 
+/* The sweeps walk units (sweeps.py: a travel unit is the pair of a node's two planes'
+ * states with the same delays, whose row of sums serves both). ``act`` NULL: the max sweep
+ * (out, arg); else the policy sweep. Returns the first state whose action is not allowed,
+ * or -1. The extremes fold every state's out - v in index order (strict <, >, from +inf,
+ * -inf: the first of the extremes, NaN skipped), which is what numba's per-chunk min and
+ * max, then the chunks' in order, gave. */
+static int64_t sweep_units(const Geo *g, Walk *wk, const double *probs, const double *inc,
+                           const double *pent, double lam, const int8_t *act, const double *v,
+                           double *out, int8_t *arg, int64_t nchunks, int64_t c0, int64_t c1,
+                           double *lo, double *hi) {
+    int64_t n_out = g->pm.m + 1, gamma = g->pm.gamma, R = g->pm.radix;
+    const double *q0 = wk->acc, *q1 = wk->acc + R, *q2 = wk->acc + 2 * R;
+    for (int64_t c = c0; c < c1; c++) {
+        int64_t u, end, x, rm;
+        unit_chunk(g, nchunks, c, &u, &end, &x, &rm);
+        int64_t plane = u < end ? cursor_at(g, x, wk->tau) : 0;
+        while (u < end) { /* whole rows: chunks start at row boundaries */
+            Row rw = row_setup(g, plane, wk);
+            int64_t nb = rw.length;
+            double inc_d = inc[PL(plane, P_D)];
+            int pair = plane < 2 * g->pm.N;
+            if (act) {
+                int64_t used = used_actions(act, x, nb, 0, rw.loiter);
+                int64_t used2 = pair ? used_actions(act, x + rm, nb, 1, rw.loiter) : 0;
+                if (used < 0 || used2 < 0)
+                    return used < 0 ? x - 1 - used : x + rm - 1 - used2;
+                row_sums(v, probs, n_out, wk, nb, gamma, (int)(used | used2));
+                policy_row(x, nb, &rw, inc_d, pent, lam, act, wk->acc, R, 0, v, out, lo, hi);
+                if (pair)
+                    policy_row(x + rm, nb, &rw, inc_d, pent, lam, act, wk->acc, R, 1, v, out, lo,
+                               hi);
+            } else {
+                row_sums(v, probs, n_out, wk, nb, gamma, rw.loiter == NEVER ? 3 : 7);
+                max_row(x, nb, &rw, inc_d, pent, lam, q0, q1, q2, v, out, arg, lo, hi);
+                if (pair) /* the (l, -1) twin: its moves swap the two sums */
+                    max_row(x + rm, nb, &rw, inc_d, pent, lam, q1, q0, q2, v, out, arg, lo, hi);
+            }
+            u += nb;
+            x += nb;
+            if (u < end)
+                plane = next_row(g, plane, wk, &x, rm);
+        }
+    }
+    return -1;
+}
+
+/* max_sweep and policy_sweep: (geo, planes, sp, weights, probs, inc, pent, discount,
+ * A, B, C, nchunks, c0, c1), A B C = v, out, arg or act, v, out. */
+static PyObject *sweep(PyObject *args, int policy) {
+    PyObject *o[10];
+    double lam;
+    Py_ssize_t nchunks, c0, c1;
+    if (!PyArg_ParseTuple(args, "OOOOOOOdOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5],
+                          &o[6], &lam, &o[7], &o[8], &o[9], &nchunks, &c0, &c1))
+        return NULL;
+    PBuf b[10];
+    memset(b, 0, sizeof b);
+    Geo geo;
+    const Geo *g = &geo;
+    Walk wk;
+    PBuf *v = &b[policy ? 8 : 7], *out = &b[policy ? 9 : 8], *a = &b[policy ? 7 : 9];
+    if (open_walk(o, b, &geo, &wk, nchunks, c0, c1) || load_floats(o[4], o[5], o[6], b + 4, g) ||
+        pbuf_get(o[policy ? 8 : 7], v, "v", 1, 'f', 0, 0) ||
+        pbuf_get(o[policy ? 9 : 8], out, "out", 1, 'f', 0, 1) ||
+        pbuf_get(o[policy ? 7 : 9], a, policy ? "act" : "arg", 1, 'i', SZ1, !policy) ||
+        pbuf_shape(v, "v", g->pm.n_states, -1) || pbuf_shape(out, "out", g->pm.n_states, -1) ||
+        pbuf_shape(a, policy ? "act" : "arg", g->pm.n_states, -1))
+        return close_walk(NULL, &wk, b, 10);
+    double lo = INFINITY, hi = -INFINITY;
+    int8_t *acts = a->b.buf;
+    int64_t bad;
+    Py_BEGIN_ALLOW_THREADS
+    bad = sweep_units(g, &wk, b[4].b.buf, b[5].b.buf, b[6].b.buf, lam, policy ? acts : NULL,
+                      v->b.buf, out->b.buf, acts, nchunks, c0, c1, &lo, &hi);
+    Py_END_ALLOW_THREADS
+    if (bad >= 0) {
+        PyErr_Format(PyExc_ValueError, "act[%lld] = %d is not an allowed action of state %lld",
+                     (long long)bad, (int)acts[bad], (long long)bad);
+        return close_walk(NULL, &wk, b, 10);
+    }
+    return close_walk(Py_BuildValue("dd", lo, hi), &wk, b, 10);
+}
+
+PyDoc_STRVAR(max_sweep_doc,
+             "max_sweep(geo, planes, sp, weights, probs, inc, pent, discount, v, out, arg, "
+             "nchunks, c0, c1) -> (lo, hi)\n\n"
+             "out = T v on the chunks c0 <= c < c1 (the first maximising action in arg, int8);"
+             " returns the min and max of out - v over them. Releases the GIL.");
+
+static PyObject *max_sweep(PyObject *self, PyObject *args) { return sweep(args, 0); }
+
 PyDoc_STRVAR(policy_sweep_doc,
              "policy_sweep(geo, planes, sp, weights, probs, inc, pent, discount, act, v, out, "
              "nchunks, c0, c1) -> (lo, hi)\n\n"
@@ -551,158 +616,174 @@ PyDoc_STRVAR(policy_sweep_doc,
              "min and max of out - v over them. A ValueError names the first state whose "
              "action is not allowed. Releases the GIL.");
 
-static PyObject *policy_sweep(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_p, *o_inc, *o_pent, *o_act, *o_v, *o_out;
-    double lam;
-    Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOOOOdOOOnnn", &o_geo, &o_pl, &o_sp, &o_w, &o_p, &o_inc,
-                          &o_pent, &lam, &o_act, &o_v, &o_out, &nchunks, &c0, &c1))
-        return NULL;
-    PBuf b[10];
-    memset(b, 0, sizeof b);
-    Geo geo;
-    Walk wk;
-    wk.acc = NULL;
-    PyObject *res = NULL;
-    const Geo *g = &geo;
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) || load_floats(o_p, o_inc, o_pent, b + 4, g) ||
-        pbuf_get(o_act, &b[7], "act", 1, 'i', SZ1, 0) ||
-        pbuf_get(o_v, &b[8], "v", 1, 'f', 0, 0) || pbuf_get(o_out, &b[9], "out", 1, 'f', 0, 1) ||
-        pbuf_shape(&b[7], "act", g->pm.n_states, -1) ||
-        pbuf_shape(&b[8], "v", g->pm.n_states, -1) ||
-        pbuf_shape(&b[9], "out", g->pm.n_states, -1) || chunks_ok(nchunks, c0, c1) ||
-        walk_alloc(&wk, g))
-        goto done;
-    const double *probs = b[4].b.buf, *inc = b[5].b.buf, *pent = b[6].b.buf, *v = b[8].b.buf;
-    const int8_t *act = b[7].b.buf;
-    double *out = b[9].b.buf;
-    int64_t n_out = g->pm.m + 1, gamma = g->pm.gamma, R = g->pm.radix;
-    double lo = INFINITY, hi = -INFINITY;
-    int64_t bad = -1;
-    Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1 && bad < 0; c++) {
-        int64_t u, end, x, rm;
-        unit_chunk(g, nchunks, c, &u, &end, &x, &rm);
-        double lc = INFINITY, hc = -INFINITY;
-        int64_t plane = u < end ? cursor_at(g, x, wk.tau) : 0;
-        while (u < end) {
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = rw.length;
-            double inc_d = inc[PL(plane, P_D)];
-            int pair = plane < 2 * g->pm.N;
-            int64_t used = used_actions(act, x, nb, 0, rw.loiter);
-            int64_t used2 = pair ? used_actions(act, x + rm, nb, 1, rw.loiter) : 0;
-            if (used < 0 || used2 < 0) {
-                bad = used < 0 ? x - 1 - used : x + rm - 1 - used2;
-                break;
-            }
-            row_sums(v, probs, n_out, &wk, nb, gamma, (int)(used | used2));
-            for (int twin = 0; twin <= pair; twin++) {
-                int64_t xs = twin ? x + rm : x;
-                for (int64_t t = 0; t < nb; t++) {
-                    int64_t a = act[xs + t];
-                    double r = pent[t > rw.pmax ? t : rw.pmax];
-                    if (a == 2)
-                        r = r + inc_d;
-                    int64_t row = twin && a < 2 ? 1 - a : a;
-                    double q = r + lam * wk.acc[row * R + t];
-                    out[xs + t] = q;
-                    double diff = q - v[xs + t];
-                    lc = FOLD_MIN(lc, diff);
-                    hc = FOLD_MAX(hc, diff);
-                }
-            }
-            u += nb;
-            x += nb;
-            if (u < end)
-                plane = next_row(g, plane, &wk, &x, rm);
-        }
-        lo = c == c0 ? lc : FOLD_MIN(lo, lc);
-        hi = c == c0 ? hc : FOLD_MAX(hi, hc);
-    }
-    Py_END_ALLOW_THREADS
-    if (bad >= 0)
-        PyErr_Format(PyExc_ValueError, "act[%lld] = %d is not an allowed action of state %lld",
-                     (long long)bad, (int)act[bad], (long long)bad);
-    else
-        res = Py_BuildValue("dd", lo, hi);
-done:
-    free(wk.acc);
-    pbuf_release(b, 10);
-    return res;
-}
+static PyObject *policy_sweep(PyObject *self, PyObject *args) { return sweep(args, 1); }
 
 /* ------------------------------------------------------------------ passes */
-/* the chunk's states and the cursor at its first (sweeps._walk_start) */
-Py_LOCAL_INLINE(int64_t) walk_start(const Geo *g, int64_t n, int64_t nchunks, int64_t c,
-                                    Walk *wk, int64_t *x, int64_t *end) {
-    chunk_of(n, nchunks, g->pm.radix, c, x, end);
-    return *x < *end ? cursor_at(g, *x, wk->tau) : 0;
+/* What a pass does with one row: the states x .. x + nb - 1 (fast digits rw->t0 ..) of
+ * chunk c; nonzero stops the walk. */
+typedef int (*RowFn)(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                     const Row *rw, int64_t x, int64_t nb);
+
+/* The rows of the chunks c0 <= c < c1 of n states (chunks of whole ``unit``s of states;
+ * the states are start0 + x), in index order (sweeps._walk_start and its loops). */
+static void walk_rows(const Geo *g, Walk *wk, int64_t n, int64_t unit, int64_t start0,
+                      int64_t nchunks, int64_t c0, int64_t c1, RowFn fn, void *ctx) {
+    for (int64_t c = c0; c < c1; c++) {
+        int64_t x, end;
+        chunk_of(n, nchunks, unit, c, &x, &end);
+        int64_t plane = x < end ? cursor_at(g, start0 + x, wk->tau) : 0;
+        while (x < end) {
+            Row rw = row_setup(g, plane, wk);
+            int64_t nb = MIN64(rw.length, end - x);
+            if (fn(ctx, g, wk, c, plane, &rw, x, nb))
+                return;
+            x += nb;
+            if (x < end)
+                plane = advance(g, plane, wk->tau);
+        }
+    }
 }
 
-#define MIN64(a, b) ((a) < (b) ? (a) : (b))
+/* at most the model's states (a ValueError naming the array) */
+static int at_most_states(const PBuf *b, const char *name, const Geo *g) {
+    if (b->b.shape[0] > g->pm.n_states) {
+        PyErr_Format(PyExc_ValueError, "%s: length %zd, more than the %lld states", name,
+                     b->b.shape[0], (long long)g->pm.n_states);
+        return -1;
+    }
+    return 0;
+}
 
-/* the start of a pass: the geometry into b[0..3], the chunk range, the walk's buffers */
-#define PASS_BEGIN(NB)                                                                    \
-    PBuf b[NB];                                                                           \
-    memset(b, 0, sizeof b);                                                               \
-    Geo geo;                                                                              \
-    const Geo *g = &geo;                                                                  \
-    Walk wk;                                                                              \
-    wk.acc = NULL;                                                                        \
-    PyObject *res = NULL
+typedef struct {
+    char *out; /* labels (int32 or int64), comps (int64, n x (3 + m)) or successors */
+    int wide;
+    int64_t action;
+    const int8_t *act;
+    int64_t first;
+    const double *inc, *pent;
+    double best;
+} PassCtx;
+
+static int labels_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                      const Row *rw, int64_t x, int64_t nb) {
+    PassCtx *p = ctx;
+    for (int64_t i = 0; i < nb; i++) {
+        int64_t k = label_of(g, plane, rw, rw->t0 + i);
+        if (p->wide)
+            ((int64_t *)p->out)[x + i] = k;
+        else
+            ((int32_t *)p->out)[x + i] = (int32_t)k;
+    }
+    return 0;
+}
+
+static int decode_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                      const Row *rw, int64_t x, int64_t nb) {
+    PassCtx *p = ctx;
+    int64_t m = g->pm.m;
+    for (int64_t i = 0; i < nb; i++) {
+        int64_t *row = (int64_t *)p->out + (x + i) * (3 + m);
+        row[0] = PL(plane, P_L);
+        row[1] = PL(plane, P_W);
+        row[2] = PL(plane, P_D);
+        for (int64_t j = 0; j < m; j++)
+            row[3 + j] = wk->tau[j];
+        if (rw->last >= 0)
+            row[3 + rw->last] = rw->t0 + i;
+    }
+    return 0;
+}
+
+static int successor_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                         const Row *rw, int64_t x, int64_t nb) {
+    PassCtx *p = ctx;
+    int64_t width = g->pm.m + 1, *out = (int64_t *)p->out;
+    int a = (int)p->action;
+    for (int64_t i = 0; i < nb; i++) {
+        int ok = a < 2 || loiter_at(rw->loiter, rw->t0 + i);
+        for (int64_t o = 0; o < width; o++)
+            out[(x + i) * width + o] = ok ? succ_index(wk, a, o, rw->t0 + i, g->pm.gamma) : -1;
+    }
+    return 0;
+}
+
+static int check_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                     const Row *rw, int64_t x, int64_t nb) {
+    PassCtx *p = ctx;
+    for (int64_t i = 0; i < nb; i++)
+        if (p->act[x + i] == 2 && !loiter_at(rw->loiter, rw->t0 + i)) {
+            p->first = x + i;
+            return 1;
+        }
+    return 0;
+}
+
+/* The passes over one integer array: its name, dimensions, item sizes, whether written,
+ * whether the call has a scalar before it (start0, action), what a row does. */
+typedef struct {
+    const char *name;
+    int ndim, sizes, writable, scalar;
+    RowFn fn;
+} ArrayPass;
+
+enum { LABELS, DECODE, SUCCESSORS, CHECK };
+static const ArrayPass ARRAY_PASSES[4] = {
+    {"labels", 1, SZ4 | SZ8, 1, 0, labels_row},
+    {"comps", 2, SZ8, 1, 1, decode_row},
+    {"out", 2, SZ8, 1, 1, successor_row},
+    {"act", 1, SZ1, 0, 0, check_row},
+};
+
+/* labels_pass, decode_range, successor_range, check_policy_pass: (geo, planes, sp, weights,
+ * [start0 | action,] array, nchunks, c0, c1) */
+static PyObject *array_pass(PyObject *args, int which) {
+    const ArrayPass *ps = &ARRAY_PASSES[which];
+    PyObject *o[5];
+    long long scalar = 0;
+    Py_ssize_t nchunks, c0, c1;
+    if (!(ps->scalar ? PyArg_ParseTuple(args, "OOOOLOnnn", &o[0], &o[1], &o[2], &o[3], &scalar,
+                                        &o[4], &nchunks, &c0, &c1)
+                     : PyArg_ParseTuple(args, "OOOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4],
+                                        &nchunks, &c0, &c1)))
+        return NULL;
+    PBuf b[5];
+    memset(b, 0, sizeof b);
+    Geo g;
+    Walk wk;
+    if (open_walk(o, b, &g, &wk, nchunks, c0, c1) ||
+        pbuf_get(o[4], &b[4], ps->name, ps->ndim, 'i', ps->sizes, ps->writable))
+        return close_walk(NULL, &wk, b, 5);
+    int64_t n = b[4].b.shape[0], m = g.pm.m;
+    int bad = (which == DECODE && pbuf_shape(&b[4], "comps", -1, 3 + m)) ||
+              (which == SUCCESSORS && pbuf_shape(&b[4], "out", -1, m + 1)) ||
+              (which != DECODE && at_most_states(&b[4], ps->name, &g));
+    if (!bad && which == DECODE && (scalar < 0 || scalar > g.pm.n_states - n)) {
+        PyErr_Format(PyExc_ValueError, "start0 = %lld: states start0 .. start0 + %lld are "
+                     "not all among the %lld states", scalar, (long long)n,
+                     (long long)g.pm.n_states);
+        bad = 1;
+    }
+    if (!bad && which == SUCCESSORS && (scalar < 0 || scalar > 2)) {
+        PyErr_Format(PyExc_ValueError, "action = %lld: expected 0, 1 or 2", scalar);
+        bad = 1;
+    }
+    if (bad)
+        return close_walk(NULL, &wk, b, 5);
+    PassCtx p = {b[4].b.buf, b[4].b.itemsize == 8, scalar, b[4].b.buf, -1, NULL, NULL, 0.0};
+    int64_t unit = which == DECODE ? 1 : g.pm.radix, start0 = which == DECODE ? scalar : 0;
+    Py_BEGIN_ALLOW_THREADS
+    walk_rows(&g, &wk, n, unit, start0, nchunks, c0, c1, ps->fn, &p);
+    Py_END_ALLOW_THREADS
+    return close_walk(which == CHECK ? PyLong_FromLongLong(p.first) : Py_NewRef(Py_None), &wk, b,
+                      5);
+}
 
 PyDoc_STRVAR(labels_pass_doc,
              "labels_pass(geo, planes, sp, weights, labels, nchunks, c0, c1)\n\n"
              "labels[x] (int32 or int64): the partition of every state x < labels.size of "
              "the chunks c0 <= c < c1. Releases the GIL.");
 
-static PyObject *labels_pass(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_lab;
-    Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOOnnn", &o_geo, &o_pl, &o_sp, &o_w, &o_lab, &nchunks, &c0,
-                          &c1))
-        return NULL;
-    PASS_BEGIN(5);
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) ||
-        pbuf_get(o_lab, &b[4], "labels", 1, 'i', SZ4 | SZ8, 1) ||
-        chunks_ok(nchunks, c0, c1) || walk_alloc(&wk, g))
-        goto done;
-    int64_t n = b[4].b.shape[0];
-    if (n > g->pm.n_states) {
-        PyErr_Format(PyExc_ValueError, "labels: length %lld, more than the %lld states",
-                     (long long)n, (long long)g->pm.n_states);
-        goto done;
-    }
-    int wide = b[4].b.itemsize == 8;
-    char *lab = b[4].b.buf;
-    Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1; c++) {
-        int64_t x, end;
-        int64_t plane = walk_start(g, n, nchunks, c, &wk, &x, &end);
-        while (x < end) {
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = MIN64(rw.length, end - x);
-            for (int64_t i = 0; i < nb; i++) {
-                int64_t k = label_of(g, plane, &rw, rw.t0 + i);
-                if (wide)
-                    ((int64_t *)lab)[x + i] = k;
-                else
-                    ((int32_t *)lab)[x + i] = (int32_t)k;
-            }
-            x += nb;
-            if (x < end)
-                plane = advance(g, plane, wk.tau);
-        }
-    }
-    Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
-done:
-    free(wk.acc);
-    pbuf_release(b, 5);
-    return res;
-}
+static PyObject *labels_pass(PyObject *self, PyObject *args) { return array_pass(args, LABELS); }
 
 PyDoc_STRVAR(decode_range_doc,
              "decode_range(geo, planes, sp, weights, start0, comps, nchunks, c0, c1)\n\n"
@@ -710,59 +791,7 @@ PyDoc_STRVAR(decode_range_doc,
              "the chunks c0 <= c < c1 of the rows of comps (int64, (n, 3 + m)). Releases the "
              "GIL.");
 
-static PyObject *decode_range(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_comps;
-    long long start0;
-    Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOLOnnn", &o_geo, &o_pl, &o_sp, &o_w, &start0, &o_comps,
-                          &nchunks, &c0, &c1))
-        return NULL;
-    PASS_BEGIN(5);
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) ||
-        pbuf_get(o_comps, &b[4], "comps", 2, 'i', SZ8, 1) ||
-        pbuf_shape(&b[4], "comps", -1, 3 + g->pm.m) || chunks_ok(nchunks, c0, c1) ||
-        walk_alloc(&wk, g))
-        goto done;
-    int64_t n = b[4].b.shape[0], m = g->pm.m, width = 3 + m;
-    if (start0 < 0 || start0 > g->pm.n_states - n) {
-        PyErr_Format(PyExc_ValueError, "start0 = %lld: states start0 .. start0 + %lld are "
-                     "not all among the %lld states", start0, (long long)n,
-                     (long long)g->pm.n_states);
-        goto done;
-    }
-    int64_t *comps = b[4].b.buf;
-    Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1; c++) {
-        int64_t lo, hi;
-        chunk_of(n, nchunks, 1, c, &lo, &hi);
-        int64_t x = lo;
-        int64_t plane = x < hi ? cursor_at(g, start0 + x, wk.tau) : 0;
-        while (x < hi) {
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = MIN64(rw.length, hi - x);
-            for (int64_t i = 0; i < nb; i++) {
-                int64_t *row = comps + (x + i) * width;
-                row[0] = PL(plane, P_L);
-                row[1] = PL(plane, P_W);
-                row[2] = PL(plane, P_D);
-                for (int64_t j = 0; j < m; j++)
-                    row[3 + j] = wk.tau[j];
-                if (rw.last >= 0)
-                    row[3 + rw.last] = rw.t0 + i;
-            }
-            x += nb;
-            if (x < hi)
-                plane = advance(g, plane, wk.tau);
-        }
-    }
-    Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
-done:
-    free(wk.acc);
-    pbuf_release(b, 5);
-    return res;
-}
+static PyObject *decode_range(PyObject *self, PyObject *args) { return array_pass(args, DECODE); }
 
 PyDoc_STRVAR(successor_range_doc,
              "successor_range(geo, planes, sp, weights, action, out, nchunks, c0, c1)\n\n"
@@ -771,50 +800,7 @@ PyDoc_STRVAR(successor_range_doc,
              "c0 <= c < c1. Releases the GIL.");
 
 static PyObject *successor_range(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_out;
-    long long action;
-    Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOLOnnn", &o_geo, &o_pl, &o_sp, &o_w, &action, &o_out,
-                          &nchunks, &c0, &c1))
-        return NULL;
-    PASS_BEGIN(5);
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) ||
-        pbuf_get(o_out, &b[4], "out", 2, 'i', SZ8, 1) ||
-        pbuf_shape(&b[4], "out", -1, g->pm.m + 1) || chunks_ok(nchunks, c0, c1) ||
-        walk_alloc(&wk, g))
-        goto done;
-    int64_t n = b[4].b.shape[0], width = g->pm.m + 1, gamma = g->pm.gamma;
-    if (action < 0 || action > 2 || n > g->pm.n_states) {
-        PyErr_Format(PyExc_ValueError, "action = %lld (0, 1 or 2) and out's %lld rows (at most "
-                     "the %lld states)", action, (long long)n, (long long)g->pm.n_states);
-        goto done;
-    }
-    int a = (int)action;
-    int64_t *out = b[4].b.buf;
-    Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1; c++) {
-        int64_t x, end;
-        int64_t plane = walk_start(g, n, nchunks, c, &wk, &x, &end);
-        while (x < end) {
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = MIN64(rw.length, end - x);
-            for (int64_t i = 0; i < nb; i++) {
-                int ok = a < 2 || loiter_at(rw.loiter, rw.t0 + i);
-                for (int64_t o = 0; o < width; o++)
-                    out[(x + i) * width + o] = ok ? succ_index(&wk, a, o, rw.t0 + i, gamma) : -1;
-            }
-            x += nb;
-            if (x < end)
-                plane = advance(g, plane, wk.tau);
-        }
-    }
-    Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
-done:
-    free(wk.acc);
-    pbuf_release(b, 5);
-    return res;
+    return array_pass(args, SUCCESSORS);
 }
 
 PyDoc_STRVAR(check_policy_pass_doc,
@@ -823,47 +809,23 @@ PyDoc_STRVAR(check_policy_pass_doc,
              "(int8) is a forbidden loiter, or -1. Releases the GIL.");
 
 static PyObject *check_policy_pass(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_act;
-    Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOOnnn", &o_geo, &o_pl, &o_sp, &o_w, &o_act, &nchunks, &c0,
-                          &c1))
-        return NULL;
-    PASS_BEGIN(5);
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) ||
-        pbuf_get(o_act, &b[4], "act", 1, 'i', SZ1, 0) || chunks_ok(nchunks, c0, c1) ||
-        walk_alloc(&wk, g))
-        goto done;
-    int64_t n = b[4].b.shape[0];
-    if (n > g->pm.n_states) {
-        PyErr_Format(PyExc_ValueError, "act: length %lld, more than the %lld states",
-                     (long long)n, (long long)g->pm.n_states);
-        goto done;
+    return array_pass(args, CHECK);
+}
+
+/* the fold of |R_u(x)| over the row: every value >= +0.0, so folding the chunks into one
+ * maximum from 0.0 is numba's per-chunk maxima from 0.0, then their maximum */
+static int absmax_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                      const Row *rw, int64_t x, int64_t nb) {
+    PassCtx *p = ctx;
+    double inc_d = p->inc[PL(plane, P_D)];
+    for (int64_t i = 0; i < nb; i++) {
+        int64_t t = rw->t0 + i;
+        double pen = p->pent[t > rw->pmax ? t : rw->pmax];
+        p->best = FOLD_MAX(p->best, fabs(pen));
+        if (loiter_at(rw->loiter, t))
+            p->best = FOLD_MAX(p->best, fabs(pen + inc_d));
     }
-    const int8_t *act = b[4].b.buf;
-    int64_t first = -1;
-    Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1 && first < 0; c++) {
-        int64_t x, end;
-        int64_t plane = walk_start(g, n, nchunks, c, &wk, &x, &end);
-        while (x < end && first < 0) {
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = MIN64(rw.length, end - x);
-            for (int64_t i = 0; i < nb; i++)
-                if (act[x + i] == 2 && !loiter_at(rw.loiter, rw.t0 + i)) {
-                    first = x + i;
-                    break;
-                }
-            x += nb;
-            if (x < end)
-                plane = advance(g, plane, wk.tau);
-        }
-    }
-    Py_END_ALLOW_THREADS
-    res = PyLong_FromLongLong(first);
-done:
-    free(wk.acc);
-    pbuf_release(b, 5);
-    return res;
+    return 0;
 }
 
 PyDoc_STRVAR(reward_absmax_pass_doc,
@@ -872,49 +834,25 @@ PyDoc_STRVAR(reward_absmax_pass_doc,
              "Releases the GIL.");
 
 static PyObject *reward_absmax_pass(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_inc, *o_pent;
+    PyObject *o[6];
     Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOOOnnn", &o_geo, &o_pl, &o_sp, &o_w, &o_inc, &o_pent,
+    if (!PyArg_ParseTuple(args, "OOOOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5],
                           &nchunks, &c0, &c1))
         return NULL;
-    PASS_BEGIN(6);
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) ||
-        pbuf_get(o_inc, &b[4], "inc", 1, 'f', 0, 0) ||
-        pbuf_get(o_pent, &b[5], "pent", 1, 'f', 0, 0) ||
-        pbuf_shape(&b[4], "inc", g->pm.D + 1, -1) || pbuf_shape(&b[5], "pent", g->pm.radix, -1) ||
-        chunks_ok(nchunks, c0, c1) || walk_alloc(&wk, g))
-        goto done;
-    const double *inc = b[4].b.buf, *pent = b[5].b.buf;
-    int64_t n = g->pm.n_states;
-    double best = 0.0;
+    PBuf b[6];
+    memset(b, 0, sizeof b);
+    Geo g;
+    Walk wk;
+    if (open_walk(o, b, &g, &wk, nchunks, c0, c1) ||
+        pbuf_get(o[4], &b[4], "inc", 1, 'f', 0, 0) ||
+        pbuf_get(o[5], &b[5], "pent", 1, 'f', 0, 0) ||
+        pbuf_shape(&b[4], "inc", g.pm.D + 1, -1) || pbuf_shape(&b[5], "pent", g.pm.radix, -1))
+        return close_walk(NULL, &wk, b, 6);
+    PassCtx p = {NULL, 0, 0, NULL, -1, b[4].b.buf, b[5].b.buf, 0.0};
     Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1; c++) {
-        int64_t x, end;
-        int64_t plane = walk_start(g, n, nchunks, c, &wk, &x, &end);
-        double bc = 0.0;
-        while (x < end) {
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = MIN64(rw.length, end - x);
-            double inc_d = inc[PL(plane, P_D)];
-            for (int64_t i = 0; i < nb; i++) {
-                int64_t t = rw.t0 + i;
-                double pen = pent[t > rw.pmax ? t : rw.pmax];
-                bc = FOLD_MAX(bc, fabs(pen));
-                if (loiter_at(rw.loiter, t))
-                    bc = FOLD_MAX(bc, fabs(pen + inc_d));
-            }
-            x += nb;
-            if (x < end)
-                plane = advance(g, plane, wk.tau);
-        }
-        best = c == c0 ? bc : FOLD_MAX(best, bc);
-    }
+    walk_rows(&g, &wk, g.pm.n_states, g.pm.radix, 0, nchunks, c0, c1, absmax_row, &p);
     Py_END_ALLOW_THREADS
-    res = PyFloat_FromDouble(best);
-done:
-    free(wk.acc);
-    pbuf_release(b, 6);
-    return res;
+    return close_walk(PyFloat_FromDouble(p.best), &wk, b, 6);
 }
 
 /* columns of the greedy pass's statistics (sweeps.F_*, I_*) */
@@ -936,29 +874,39 @@ Py_LOCAL_INLINE(double) array_max(const double *q, int n) {
     return best;
 }
 
+typedef struct {
+    const double *probs, *inc, *pent, *v, *w_low, *v_up;
+    double lam, tie_rtol, loss_tol;
+    const int32_t *lab32;
+    const int64_t *lab64;
+    const int8_t *pistar;
+    int8_t *pi_s;
+    double *fstats;
+    int64_t *istats;
+} GreedyCtx;
+
 /* pi_s[x] and the state's share of the statistics (sweeps._greedy_record) */
-Py_LOCAL_INLINE(void) greedy_record(int64_t x, const double *qv, const double *qw, int n_act,
-                                    int64_t k, const double *v, const double *w_low,
-                                    const double *v_up, const int8_t *pistar, double tie_rtol,
-                                    double loss_tol, int8_t *pi_s, double *f, int64_t *st) {
+Py_LOCAL_INLINE(void) greedy_record(const GreedyCtx *p, int64_t x, const double *qv,
+                                    const double *qw, int n_act, int64_t k, double *f,
+                                    int64_t *st) {
     double best_v = array_max(qv, n_act);
     double best_w = array_max(qw, n_act);
     double aw = fabs(best_w), av = fabs(best_v);
-    double thr_w = best_w - tie_rtol * (aw > 1.0 ? aw : 1.0);
+    double thr_w = best_w - p->tie_rtol * (aw > 1.0 ? aw : 1.0);
     int a_s = 0;
     while (a_s < n_act - 1 && qw[a_s] < thr_w)
         a_s += 1;
-    pi_s[x] = (int8_t)a_s;
-    if (qv[a_s] >= best_v - tie_rtol * (av > 1.0 ? av : 1.0))
+    p->pi_s[x] = (int8_t)a_s;
+    if (qv[a_s] >= best_v - p->tie_rtol * (av > 1.0 ? av : 1.0))
         st[I_OPTIMAL] += 1;
     double loss = best_v - qv[a_s];
     f[F_LOSS_MAX] = FOLD_MAX(f[F_LOSS_MAX], loss);
-    if (loss > loss_tol)
+    if (loss > p->loss_tol)
         st[I_SUBOPT] += 1;
-    if (a_s != pistar[x])
+    if (a_s != p->pistar[x])
         st[I_DIFFERS] += 1;
-    double up = v_up[k] - v[x];
-    double low = v[x] - w_low[k];
+    double up = p->v_up[k] - p->v[x];
+    double low = p->v[x] - p->w_low[k];
     f[F_UP_SUM] += up;
     f[F_UP_MAX] = FOLD_MAX(f[F_UP_MAX], up);
     if (up < f[F_UP_MIN]) {
@@ -971,9 +919,38 @@ Py_LOCAL_INLINE(void) greedy_record(int64_t x, const double *qv, const double *q
         f[F_LOW_MIN] = low;
         st[I_LOW_ARGMIN] = x;
     }
-    double gap = v_up[k] - w_low[k];
+    double gap = p->v_up[k] - p->w_low[k];
     f[F_GAP_SUM] += gap;
     f[F_GAP_MAX] = FOLD_MAX(f[F_GAP_MAX], gap);
+}
+
+#define LABEL(p, s) ((p)->lab64 ? (p)->lab64[s] : (int64_t)(p)->lab32[s])
+
+/* a whole row (chunks start at row boundaries): the sums of V*, then per state the Q-values
+ * of V* and of the lifted w_low, in outcome order (sweeps.greedy_pass) */
+static int greedy_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                      const Row *rw, int64_t x, int64_t nb) {
+    const GreedyCtx *p = ctx;
+    int64_t n_out = g->pm.m + 1, gamma = g->pm.gamma, R = g->pm.radix;
+    double *f = p->fstats + c * F_LEN;
+    int64_t *st = p->istats + c * I_LEN;
+    double inc_d = p->inc[PL(plane, P_D)];
+    row_sums(p->v, p->probs, n_out, wk, nb, gamma, rw->loiter == NEVER ? 3 : 7);
+    for (int64_t t = 0; t < nb; t++) {
+        double qv[3], qw[3];
+        double pen = p->pent[t > rw->pmax ? t : rw->pmax];
+        int n_act = loiter_at(rw->loiter, t) ? 3 : 2;
+        for (int a = 0; a < n_act; a++) {
+            double r = a == 2 ? pen + inc_d : pen;
+            qv[a] = r + p->lam * wk->acc[a * R + t];
+            double lifted = 0.0;
+            for (int64_t o = 0; o < n_out; o++)
+                lifted += p->probs[o] * p->w_low[LABEL(p, succ_index(wk, a, o, t, gamma))];
+            qw[a] = r + p->lam * lifted;
+        }
+        greedy_record(p, x + t, qv, qw, n_act, LABEL(p, x + t), f, st);
+    }
+    return 0;
 }
 
 /* labels read as partitions: entries in [0, n_parts) (ValueError naming the first not) */
@@ -998,104 +975,95 @@ PyDoc_STRVAR(greedy_pass_doc,
              "int64) of lpbounds.patrol.sweeps (F_*, I_*). Releases the GIL.");
 
 static PyObject *greedy_pass(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_p, *o_inc, *o_pent, *o_v, *o_lab, *o_low, *o_up;
-    PyObject *o_pistar, *o_pis, *o_f, *o_st;
-    double lam, tie_rtol, loss_tol;
+    PyObject *o[15];
+    GreedyCtx p;
     Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOOOOdOOOOOddOOOnnn", &o_geo, &o_pl, &o_sp, &o_w, &o_p,
-                          &o_inc, &o_pent, &lam, &o_v, &o_lab, &o_low, &o_up, &o_pistar,
-                          &tie_rtol, &loss_tol, &o_pis, &o_f, &o_st, &nchunks, &c0, &c1))
+    if (!PyArg_ParseTuple(args, "OOOOOOOdOOOOOddOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4],
+                          &o[5], &o[6], &p.lam, &o[7], &o[8], &o[9], &o[10], &o[11], &p.tie_rtol,
+                          &p.loss_tol, &o[12], &o[13], &o[14], &nchunks, &c0, &c1))
         return NULL;
-    PASS_BEGIN(15);
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) || load_floats(o_p, o_inc, o_pent, b + 4, g) ||
-        pbuf_get(o_v, &b[7], "v", 1, 'f', 0, 0) ||
-        pbuf_get(o_lab, &b[8], "labels", 1, 'i', SZ4 | SZ8, 0) ||
-        pbuf_get(o_low, &b[9], "w_low", 1, 'f', 0, 0) ||
-        pbuf_get(o_up, &b[10], "v_up", 1, 'f', 0, 0) ||
-        pbuf_get(o_pistar, &b[11], "pistar", 1, 'i', SZ1, 0) ||
-        pbuf_get(o_pis, &b[12], "pi_s", 1, 'i', SZ1, 1) ||
-        pbuf_get(o_f, &b[13], "fstats", 2, 'f', 0, 1) ||
-        pbuf_get(o_st, &b[14], "istats", 2, 'i', SZ8, 1) || chunks_ok(nchunks, c0, c1))
-        goto done;
-    int64_t n = b[7].b.shape[0];
-    if (n > g->pm.n_states || pbuf_shape(&b[8], "labels", n, -1) ||
-        pbuf_shape(&b[10], "v_up", b[9].b.shape[0], -1) ||
-        pbuf_shape(&b[11], "pistar", n, -1) || pbuf_shape(&b[12], "pi_s", n, -1) ||
-        pbuf_shape(&b[13], "fstats", nchunks, F_LEN) ||
-        pbuf_shape(&b[14], "istats", nchunks, I_LEN) || labels_ok(&b[8], b[9].b.shape[0]) ||
-        walk_alloc(&wk, g)) {
-        if (!PyErr_Occurred())
-            PyErr_Format(PyExc_ValueError, "v: length %lld, more than the %lld states",
-                         (long long)n, (long long)g->pm.n_states);
-        goto done;
-    }
-    const double *probs = b[4].b.buf, *inc = b[5].b.buf, *pent = b[6].b.buf, *v = b[7].b.buf;
-    const double *w_low = b[9].b.buf, *v_up = b[10].b.buf;
-    const int8_t *pistar = b[11].b.buf;
-    int8_t *pi_s = b[12].b.buf;
-    double *fstats = b[13].b.buf;
-    int64_t *istats = b[14].b.buf;
-    const PBuf *lab = &b[8];
-    int wide = lab->b.itemsize == 8;
-    const int32_t *lab32 = lab->b.buf;
-    const int64_t *lab64 = lab->b.buf;
-    int64_t n_out = g->pm.m + 1, gamma = g->pm.gamma, R = g->pm.radix;
+    PBuf b[15];
+    memset(b, 0, sizeof b);
+    Geo g;
+    Walk wk;
+    static const char *const names[8] = {"v", "labels", "w_low", "v_up", "pistar", "pi_s",
+                                         "fstats", "istats"};
+    static const char kinds[8] = {'f', 'i', 'f', 'f', 'i', 'i', 'f', 'i'};
+    static const int sizes[8] = {0, SZ4 | SZ8, 0, 0, SZ1, SZ1, 0, SZ8};
+    if (open_walk(o, b, &g, &wk, nchunks, c0, c1) || load_floats(o[4], o[5], o[6], b + 4, &g))
+        return close_walk(NULL, &wk, b, 15);
+    for (int i = 0; i < 8; i++)
+        if (pbuf_get(o[7 + i], &b[7 + i], names[i], i < 6 ? 1 : 2, kinds[i], sizes[i], i >= 5))
+            return close_walk(NULL, &wk, b, 15);
+    Py_ssize_t n = b[7].b.shape[0], n_parts = b[9].b.shape[0];
+    if (at_most_states(&b[7], "v", &g) || pbuf_shape(&b[8], "labels", n, -1) ||
+        pbuf_shape(&b[10], "v_up", n_parts, -1) || pbuf_shape(&b[11], "pistar", n, -1) ||
+        pbuf_shape(&b[12], "pi_s", n, -1) || pbuf_shape(&b[13], "fstats", nchunks, F_LEN) ||
+        pbuf_shape(&b[14], "istats", nchunks, I_LEN) || labels_ok(&b[8], n_parts))
+        return close_walk(NULL, &wk, b, 15);
+    p.probs = b[4].b.buf;
+    p.inc = b[5].b.buf;
+    p.pent = b[6].b.buf;
+    p.v = b[7].b.buf;
+    p.lab32 = b[8].b.itemsize == 4 ? b[8].b.buf : NULL;
+    p.lab64 = b[8].b.itemsize == 8 ? b[8].b.buf : NULL;
+    p.w_low = b[9].b.buf;
+    p.v_up = b[10].b.buf;
+    p.pistar = b[11].b.buf;
+    p.pi_s = b[12].b.buf;
+    p.fstats = b[13].b.buf;
+    p.istats = b[14].b.buf;
     Py_BEGIN_ALLOW_THREADS
-    for (int64_t c = c0; c < c1; c++) {
-        double *f = fstats + c * F_LEN;
-        int64_t *st = istats + c * I_LEN;
+    for (int64_t c = c0; c < c1; c++) { /* numba's _greedy_init */
+        double *f = p.fstats + c * F_LEN;
+        int64_t *st = p.istats + c * I_LEN;
         for (int i = 0; i < F_LEN; i++)
             f[i] = 0.0;
-        f[F_UP_MIN] = INFINITY;
-        f[F_LOW_MIN] = INFINITY;
-        f[F_UP_MAX] = -INFINITY;
-        f[F_LOW_MAX] = -INFINITY;
-        f[F_GAP_MAX] = -INFINITY;
-        f[F_LOSS_MAX] = -INFINITY;
+        f[F_UP_MIN] = f[F_LOW_MIN] = INFINITY;
+        f[F_UP_MAX] = f[F_LOW_MAX] = f[F_GAP_MAX] = f[F_LOSS_MAX] = -INFINITY;
         for (int i = 0; i < I_LEN; i++)
             st[i] = 0;
-        int64_t x, end;
-        int64_t plane = walk_start(g, n, nchunks, c, &wk, &x, &end);
-        while (x < end) { /* whole rows: chunks start at row boundaries */
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = rw.length;
-            double inc_d = inc[PL(plane, P_D)];
-            row_sums(v, probs, n_out, &wk, nb, gamma, rw.loiter == NEVER ? 3 : 7);
-            for (int64_t t = 0; t < nb; t++) {
-                double qv[3], qw[3];
-                double pen = pent[t > rw.pmax ? t : rw.pmax];
-                int n_act = loiter_at(rw.loiter, t) ? 3 : 2;
-                for (int a = 0; a < n_act; a++) {
-                    double r = a == 2 ? pen + inc_d : pen;
-                    qv[a] = r + lam * wk.acc[a * R + t];
-                    double lifted = 0.0;
-                    for (int64_t o = 0; o < n_out; o++) {
-                        int64_t s = succ_index(&wk, a, o, t, gamma);
-                        lifted += probs[o] * w_low[wide ? lab64[s] : lab32[s]];
-                    }
-                    qw[a] = r + lam * lifted;
-                }
-                int64_t xi = x + t;
-                greedy_record(xi, qv, qw, n_act, wide ? lab64[xi] : lab32[xi], v, w_low, v_up,
-                              pistar, tie_rtol, loss_tol, pi_s, f, st);
-            }
-            x += nb;
-            if (x < end)
-                plane = advance(g, plane, wk.tau);
-        }
     }
+    walk_rows(&g, &wk, n, g.pm.radix, 0, nchunks, c0, c1, greedy_row, &p);
     Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
-done:
-    free(wk.acc);
-    pbuf_release(b, 15);
-    return res;
+    return close_walk(Py_NewRef(Py_None), &wk, b, 15);
 }
 
 /* columns of the V_sub pass's statistics (sweeps.S_*, J_*) */
 enum { S_SUM, S_MAX, S_MIN, S_LOW_MIN, S_LEN };
 enum { J_ARGMAX, J_ARGMIN, J_LOW_ARGMIN, J_LEN };
+
+typedef struct {
+    const double *vstar, *vsub, *w_low;
+    double *fstats;
+    int64_t *istats;
+} VsubCtx;
+
+static int vsub_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+                    const Row *rw, int64_t x, int64_t nb) {
+    const VsubCtx *p = ctx;
+    double *f = p->fstats + c * S_LEN;
+    int64_t *st = p->istats + c * J_LEN;
+    for (int64_t i = 0; i < nb; i++) {
+        int64_t xi = x + i;
+        double diff = p->vstar[xi] - p->vsub[xi];
+        f[S_SUM] += diff;
+        if (diff > f[S_MAX]) {
+            f[S_MAX] = diff;
+            st[J_ARGMAX] = xi;
+        }
+        if (diff < f[S_MIN]) {
+            f[S_MIN] = diff;
+            st[J_ARGMIN] = xi;
+        }
+        double low = p->vsub[xi] - p->w_low[label_of(g, plane, rw, rw->t0 + i)];
+        if (low < f[S_LOW_MIN]) {
+            f[S_LOW_MIN] = low;
+            st[J_LOW_ARGMIN] = xi;
+        }
+    }
+    return 0;
+}
 
 PyDoc_STRVAR(vsub_pass_doc,
              "vsub_pass(geo, planes, sp, weights, vstar, vsub, w_low, fstats, istats, "
@@ -1105,77 +1073,39 @@ PyDoc_STRVAR(vsub_pass_doc,
              "Releases the GIL.");
 
 static PyObject *vsub_pass(PyObject *self, PyObject *args) {
-    PyObject *o_geo, *o_pl, *o_sp, *o_w, *o_vs, *o_vsub, *o_low, *o_f, *o_st;
+    PyObject *o[9];
     Py_ssize_t nchunks, c0, c1;
-    if (!PyArg_ParseTuple(args, "OOOOOOOOOnnn", &o_geo, &o_pl, &o_sp, &o_w, &o_vs, &o_vsub,
-                          &o_low, &o_f, &o_st, &nchunks, &c0, &c1))
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
+                          &o[7], &o[8], &nchunks, &c0, &c1))
         return NULL;
-    PASS_BEGIN(9);
-    if (load_geo(o_geo, o_pl, o_sp, o_w, b, &geo) ||
-        pbuf_get(o_vs, &b[4], "vstar", 1, 'f', 0, 0) ||
-        pbuf_get(o_vsub, &b[5], "vsub", 1, 'f', 0, 0) ||
-        pbuf_get(o_low, &b[6], "w_low", 1, 'f', 0, 0) ||
-        pbuf_get(o_f, &b[7], "fstats", 2, 'f', 0, 1) ||
-        pbuf_get(o_st, &b[8], "istats", 2, 'i', SZ8, 1) || chunks_ok(nchunks, c0, c1) ||
-        pbuf_shape(&b[6], "w_low", g->pm.n_partitions, -1))
-        goto done;
-    int64_t n = b[4].b.shape[0];
-    if (n > g->pm.n_states || pbuf_shape(&b[5], "vsub", n, -1) ||
-        pbuf_shape(&b[7], "fstats", nchunks, S_LEN) ||
-        pbuf_shape(&b[8], "istats", nchunks, J_LEN) || walk_alloc(&wk, g)) {
-        if (!PyErr_Occurred())
-            PyErr_Format(PyExc_ValueError, "vstar: length %lld, more than the %lld states",
-                         (long long)n, (long long)g->pm.n_states);
-        goto done;
-    }
-    const double *vstar = b[4].b.buf, *vsub = b[5].b.buf, *w_low = b[6].b.buf;
-    double *fstats = b[7].b.buf;
-    int64_t *istats = b[8].b.buf;
+    PBuf b[9];
+    memset(b, 0, sizeof b);
+    Geo g;
+    Walk wk;
+    if (open_walk(o, b, &g, &wk, nchunks, c0, c1) ||
+        pbuf_get(o[4], &b[4], "vstar", 1, 'f', 0, 0) ||
+        pbuf_get(o[5], &b[5], "vsub", 1, 'f', 0, 0) ||
+        pbuf_get(o[6], &b[6], "w_low", 1, 'f', 0, 0) ||
+        pbuf_get(o[7], &b[7], "fstats", 2, 'f', 0, 1) ||
+        pbuf_get(o[8], &b[8], "istats", 2, 'i', SZ8, 1) || at_most_states(&b[4], "vstar", &g) ||
+        pbuf_shape(&b[5], "vsub", b[4].b.shape[0], -1) ||
+        pbuf_shape(&b[6], "w_low", g.pm.n_partitions, -1) ||
+        pbuf_shape(&b[7], "fstats", nchunks, S_LEN) || pbuf_shape(&b[8], "istats", nchunks, J_LEN))
+        return close_walk(NULL, &wk, b, 9);
+    VsubCtx p = {b[4].b.buf, b[5].b.buf, b[6].b.buf, b[7].b.buf, b[8].b.buf};
     Py_BEGIN_ALLOW_THREADS
     for (int64_t c = c0; c < c1; c++) {
-        double *f = fstats + c * S_LEN;
-        int64_t *st = istats + c * J_LEN;
+        double *f = p.fstats + c * S_LEN;
+        int64_t *st = p.istats + c * J_LEN;
         f[S_SUM] = 0.0;
         f[S_MAX] = -INFINITY;
-        f[S_MIN] = INFINITY;
-        f[S_LOW_MIN] = INFINITY;
+        f[S_MIN] = f[S_LOW_MIN] = INFINITY;
         for (int i = 0; i < J_LEN; i++)
             st[i] = 0;
-        int64_t x, end;
-        int64_t plane = walk_start(g, n, nchunks, c, &wk, &x, &end);
-        while (x < end) {
-            Row rw = row_setup(g, plane, &wk);
-            int64_t nb = MIN64(rw.length, end - x);
-            for (int64_t i = 0; i < nb; i++) {
-                int64_t xi = x + i;
-                double diff = vstar[xi] - vsub[xi];
-                f[S_SUM] += diff;
-                if (diff > f[S_MAX]) {
-                    f[S_MAX] = diff;
-                    st[J_ARGMAX] = xi;
-                }
-                if (diff < f[S_MIN]) {
-                    f[S_MIN] = diff;
-                    st[J_ARGMIN] = xi;
-                }
-                double low = vsub[xi] - w_low[label_of(g, plane, &rw, rw.t0 + i)];
-                if (low < f[S_LOW_MIN]) {
-                    f[S_LOW_MIN] = low;
-                    st[J_LOW_ARGMIN] = xi;
-                }
-            }
-            x += nb;
-            if (x < end)
-                plane = advance(g, plane, wk.tau);
-        }
     }
+    walk_rows(&g, &wk, b[4].b.shape[0], g.pm.radix, 0, nchunks, c0, c1, vsub_row, &p);
     Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
-done:
-    free(wk.acc);
-    pbuf_release(b, 9);
-    return res;
+    return close_walk(Py_NewRef(Py_None), &wk, b, 9);
 }
 
 /* ------------------------------------------------------------------ the model's kernels */
@@ -1244,8 +1174,7 @@ static PyObject *decode_states(PyObject *self, PyObject *args) {
 #undef TAU_I
     }
     Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
+    res = Py_NewRef(Py_None);
 done:
     pbuf_release(b, 6);
     return res;
@@ -1331,8 +1260,7 @@ static PyObject *successor_states(PyObject *self, PyObject *args) {
 #undef OUT_I
     }
     Py_END_ALLOW_THREADS
-    res = Py_None;
-    Py_INCREF(res);
+    res = Py_NewRef(Py_None);
 done:
     pbuf_release(b, 8);
     return res;
