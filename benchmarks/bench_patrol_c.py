@@ -139,6 +139,19 @@ def reproduce(pythonpath: str | None, cache: str, out: str) -> dict:
     return {"wall": wall, "load": os.getloadavg()[0]}
 
 
+PROBE = """
+import json, sys
+from lpbounds.cli.main import entry
+sys.argv = ["lpbounds", "reproduce", {model!r}, "--seeds", "1", "--steps", "2000", "--out",
+            {out!r}, "--no-figures", "-q"]
+try:
+    entry()
+except SystemExit:
+    pass
+print(json.dumps({{"numba": "numba" in sys.modules}}))
+"""
+
+
 def med(runs: list[dict], key: str) -> float:
     return statistics.median(r[key] for r in runs)
 
@@ -148,6 +161,10 @@ def agree(runs: dict[str, list[dict]], what: str) -> str:
     if len(hashes) != 1:
         raise SystemExit(f"{what}: the two trees disagree: {sorted(hashes)}")
     return hashes.pop()
+
+
+def _yes(flag: bool) -> str:
+    return "imported" if flag else "not imported"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -181,6 +198,10 @@ def main(argv: list[str] | None = None) -> int:
                 out = str(tmp / f"out-{name}-{i}")
                 cold[name].append(reproduce(path, cache, out))
                 warm[name].append(reproduce(path, cache, out))
+        numba_in = {
+            name: child(PROBE.format(model=str(SMALL_MODEL), out=str(tmp / "probe")), path)["numba"]
+            for name, path in trees.items()
+        }
         h_vs = agree({k: vs[k] + vs_cold[k] for k in trees}, "V*")
         h_mc = agree(mc, "Monte Carlo")
     finally:
@@ -224,7 +245,8 @@ cache loaded, not timed); "whole process": from interpreter start, numba's cache
 `reproduce`: `lpbounds reproduce models/patrol-small.toml --seeds 1 --steps 2000
 --no-figures -q`, the first run with an empty `NUMBA_CACHE_DIR` (a fresh environment),
 the second with the cache it left; first / second: numba {first_second["numba"]:.2f},
-C {first_second["C"]:.2f} (numba still compiles the kernels that are not the patrol's).
+C {first_second["C"]:.2f}. numba in the `reproduce` process: {_yes(numba_in["numba"])} before,
+{_yes(numba_in["C"])} in the C tree (the small model's other sweeps are numpy's).
 
 {chr(10).join(lines)}
 """
