@@ -24,5 +24,17 @@ setup(
             sources=["src/lpbounds/_kernels/rowkernels.c"],
             extra_compile_args=FLAGS,
         ),
+        Extension(
+            "lpbounds._kernels.patrolsweeps",
+            sources=["src/lpbounds/_kernels/patrolsweeps.c"],
+            depends=["src/lpbounds/_kernels/patrol.h", "src/lpbounds/_kernels/buffers.h"],
+            extra_compile_args=FLAGS,
+        ),
+        Extension(
+            "lpbounds._kernels.patrolmc",
+            sources=["src/lpbounds/_kernels/patrolmc.c"],
+            depends=["src/lpbounds/_kernels/patrol.h", "src/lpbounds/_kernels/buffers.h"],
+            extra_compile_args=FLAGS,
+        ),
     ]
 )

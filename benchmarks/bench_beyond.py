@@ -56,7 +56,7 @@ if "{path}" == "array":
     policy = np.asarray(r.policy, dtype=np.int8)
 else:
     from lpbounds.patrol.matrix_free import MatrixFreePatrol, solve_vstar
-    solve_vstar(MatrixFreePatrol(warm))  # numba's cache loaded (or compiled), not timed
+    solve_vstar(MatrixFreePatrol(warm))  # the C sweeps' first run, not timed
     t = time.perf_counter()
     model = MatrixFreePatrol(p)
     build = time.perf_counter() - t
@@ -88,6 +88,7 @@ log(f"done: peak rss {r.peak_rss_mb:.0f} MB, seconds {r.seconds}")
 SWEEPS = r"""
 import json, os, time, numpy as np, numba
 from numba import njit, prange
+from lpbounds._kernels import threads
 from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol.matrix_free import MatrixFreePatrol
@@ -121,11 +122,13 @@ for name in __NAMES__:
         act = arg.copy()
         r = {}
         for k in sorted({1, many}):
-            numba.set_num_threads(k)
+            numba.set_num_threads(k)  # the array path's kernels
+            threads.set_threads(k)  # the matrix-free sweeps (C)
             op.sweep_max(v, u, arg, work=work)
             r[f"max/{k}"] = best(lambda: op.sweep_max(v, u, arg, work=work), 15)
             r[f"policy/{k}"] = best(lambda: op.sweep_policy(act, v, u, work=work), 15)
         numba.set_num_threads(many)
+        threads.set_threads(many)
         res[path] = r
     out["sizes"][name] = res
     out["load"].append(os.getloadavg()[0])
@@ -455,7 +458,8 @@ Machine: {machine()}; {today()}; load average (1, 5, 15 min) during the runs: {"
 
 The paper's instance, `solve_exact` (array path: successor arrays and the post-decision
 form) against `lpbounds.patrol.matrix_free.solve_vstar` (nothing stored per state), each
-in a fresh process after an untimed solve of a small instance (numba's cache loaded),
+in a fresh process after an untimed solve of a small instance (numba's cache loaded for
+the array path's kernels),
 {args.repeat} alternating runs (median seconds, including building the MDP for the array path):
 
 | path | seconds | iterations | sweeps | residual | peak MB |
