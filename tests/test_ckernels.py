@@ -505,9 +505,9 @@ def test_wrong_dtypes_and_shapes_raise_typed_errors():
     rng = np.random.default_rng(3)
     indptr, action, reward, targets, probs, v = row_system(rng, 5, 2, 2, False, np.int32, False)
     out = np.empty(reward.size)
-    with pytest.raises(TypeError, match=r"targets: expected a 2-D integer array"):
+    with pytest.raises(TypeError, match=r"targets: expected a 2-dimensional integer array"):
         C.q_values(reward, targets.astype(float), probs, 0.9, v, out)
-    with pytest.raises(TypeError, match=r"out: expected a 1-D float64 array"):
+    with pytest.raises(TypeError, match=r"out: expected a 1-dimensional float64 array"):
         C.q_values(reward, targets, probs, 0.9, v, out.astype(np.float32))
     with pytest.raises(TypeError, match=r"out: expected a writable array"):
         ro = np.empty(reward.size)
@@ -520,16 +520,16 @@ def test_wrong_dtypes_and_shapes_raise_typed_errors():
     with pytest.raises(TypeError, match=r"out: not C-contiguous"):
         C.q_values(reward, targets, probs, 0.9, v, np.empty(2 * reward.size)[::2])
     succ, allowed = post_decision(rng, 6, 2, 2, np.int32, 1.0)
-    with pytest.raises(TypeError, match=r"first: expected a 2-D integer array"):
+    with pytest.raises(TypeError, match=r"first: expected a 2-dimensional integer array"):
         C.ps_fill(succ, allowed, np.arange(6, dtype=np.int32), np.empty((6, 2), np.int32),
                   np.empty((6, 2), np.int64))  # fmt: skip
     with pytest.raises(ValueError, match=r"max_codes: more codes than the dtype"):
         C.reward_codes(np.zeros((3, 2)), 257, np.empty((3, 2), np.uint8), np.empty(257))
-    with pytest.raises(TypeError, match=r"codes: expected a 2-D integer array"):
+    with pytest.raises(TypeError, match=r"codes: expected a 2-dimensional unsigned integer array"):
         C.reward_codes(np.zeros((3, 2)), 4, np.empty((3, 2), np.int16), np.empty(4))
     from lpbounds._kernels import rowkernels
 
-    with pytest.raises(ValueError, match=r"range \[0, 9\) outside \[0, 5\)"):
+    with pytest.raises(ValueError, match=r"range \[0, 9\) is not within \[0, 5\]"):
         rowkernels.bellman_maxmin(
             indptr, action, reward, targets, probs, 0.9, v, np.empty(5), np.empty(5, np.int64),
             0, 9,

@@ -1,22 +1,12 @@
 /* What the patrol's two C extensions share (patrolsweeps.c, patrolmc.c): checked integer
  * arithmetic, the partition key index of lpbounds.patrol.partitions and the model's encoding
- * (lpbounds.patrol.model); arrays through buffers.h.
- *
- * C99 with nothing compiler-specific (MSVC builds it too): no VLAs, no GNU extensions,
- * no builtins; inline functions through Python's Py_LOCAL_INLINE.
+ * (lpbounds.patrol.model). Python, the floating-point rule and the arrays come from
+ * buffers.h, which every C file of the kernels includes first.
  */
 #ifndef LPBOUNDS_PATROL_H
 #define LPBOUNDS_PATROL_H
 
 #include "buffers.h"
-#include <math.h>
-#include <string.h>
-
-#ifdef _MSC_VER
-/* no fused multiply-add: the numbers must be those of the numpy references (gcc and
- * clang get -ffp-contract=off from setup.py) */
-#pragma fp_contract(off)
-#endif
 
 /* Stations at most: a state index is an int64 and the alert pattern a 62-bit code. */
 #define PATROL_MMAX 62

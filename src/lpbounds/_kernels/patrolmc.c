@@ -36,7 +36,7 @@ typedef struct {
 
 /* mt = (cfg, station_pos, stations, w_travel, w_loiter, probs, inc, rho, discount, tie_rtol)
  * and lower, into b[0..7], checked. */
-static int load_mt(PyObject *o_mt, PyObject *o_lower, PBuf *b, Mt *mt) {
+static int load_mt(PyObject *o_mt, PyObject *o_lower, Buf *b, Mt *mt) {
     PyObject *o_cfg, *o_sp, *o_st, *o_wt, *o_wl, *o_p, *o_inc;
     if (!PyTuple_Check(o_mt) || PyTuple_GET_SIZE(o_mt) != 10) {
         PyErr_SetString(PyExc_TypeError, "mt: expected the tuple of greedy_mc._Kernel.args()");
@@ -45,14 +45,14 @@ static int load_mt(PyObject *o_mt, PyObject *o_lower, PBuf *b, Mt *mt) {
     if (!PyArg_ParseTuple(o_mt, "OOOOOOOddd", &o_cfg, &o_sp, &o_st, &o_wt, &o_wl, &o_p, &o_inc,
                           &mt->rho, &mt->discount, &mt->tie_rtol))
         return -1;
-    if (pbuf_get(o_cfg, &b[0], "mt cfg", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_sp, &b[1], "mt station_pos", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_st, &b[2], "mt stations", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_wt, &b[3], "mt w_travel", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_wl, &b[4], "mt w_loiter", 2, 'i', SZ8, 0) ||
-        pbuf_get(o_p, &b[5], "mt probs", 1, 'f', 0, 0) ||
-        pbuf_get(o_inc, &b[6], "mt inc", 1, 'f', 0, 0) ||
-        pbuf_get(o_lower, &b[7], "lower", 1, 'f', 0, 0) || pbuf_shape(&b[0], "mt cfg", 8, -1))
+    if (get(o_cfg, &b[0], "mt cfg", 1, 'i', 8, 0, 0) ||
+        get(o_sp, &b[1], "mt station_pos", 1, 'i', 8, 0, 0) ||
+        get(o_st, &b[2], "mt stations", 1, 'i', 8, 0, 0) ||
+        get(o_wt, &b[3], "mt w_travel", 1, 'i', 8, 0, 0) ||
+        get(o_wl, &b[4], "mt w_loiter", 2, 'i', 8, 0, 0) ||
+        get(o_p, &b[5], "mt probs", 1, 'f', 0, 0, 0) ||
+        get(o_inc, &b[6], "mt inc", 1, 'f', 0, 0, 0) ||
+        get(o_lower, &b[7], "lower", 1, 'f', 0, 0, 0) || check_shape(&b[0], "mt cfg", 8, -1))
         return -1;
     const int64_t *cfg = b[0].b.buf;
     PModel *pm = &mt->pm;
@@ -67,11 +67,11 @@ static int load_mt(PyObject *o_mt, PyObject *o_lower, PBuf *b, Mt *mt) {
             return -1;
         }
     mt->allow_empty = cfg[7];
-    if (pbuf_shape(&b[1], "mt station_pos", pm->N, -1) ||
-        pbuf_shape(&b[3], "mt w_travel", pm->m, -1) ||
-        pbuf_shape(&b[4], "mt w_loiter", pm->m, pm->m) ||
-        pbuf_shape(&b[5], "mt probs", pm->m + 1, -1) || pbuf_shape(&b[6], "mt inc", pm->D, -1) ||
-        pbuf_shape(&b[7], "lower", pm->n_partitions, -1) ||
+    if (check_shape(&b[1], "mt station_pos", pm->N, -1) ||
+        check_shape(&b[3], "mt w_travel", pm->m, -1) ||
+        check_shape(&b[4], "mt w_loiter", pm->m, pm->m) ||
+        check_shape(&b[5], "mt probs", pm->m + 1, -1) || check_shape(&b[6], "mt inc", pm->D, -1) ||
+        check_shape(&b[7], "lower", pm->n_partitions, -1) ||
         pmodel_stations(pm, b[1].b.buf, b[2].b.buf) ||
         pmodel_weights(pm, b[3].b.buf, b[4].b.buf, pm->m, "mt w_travel", "mt w_loiter"))
         return -1;
@@ -215,19 +215,19 @@ PyDoc_STRVAR(greedy_actions_doc,
              "greedy_actions(xs, lower, mt, out, start, end)\n\n"
              "out[i] (int8): the greedy action at state xs[i], start <= i < end. Releases the GIL.");
 
-static PyObject *greedy_actions(PyObject *self, PyObject *args) {
+static PyObject *greedy_actions(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_xs, *o_lower, *o_mt, *o_out;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOnn", &o_xs, &o_lower, &o_mt, &o_out, &start, &end))
         return NULL;
-    PBuf b[MT_BUFS + 2];
+    Buf b[MT_BUFS + 2];
     memset(b, 0, sizeof b);
     Mt mt;
     PyObject *res = NULL;
-    if (load_mt(o_mt, o_lower, b, &mt) || pbuf_get(o_xs, &b[8], "xs", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_out, &b[9], "out", 1, 'i', SZ1, 1) ||
-        pbuf_shape(&b[9], "out", b[8].b.shape[0], -1) ||
-        range_ok(start, end, b[8].b.shape[0], "states"))
+    if (load_mt(o_mt, o_lower, b, &mt) || get(o_xs, &b[8], "xs", 1, 'i', 8, 0, 0) ||
+        get(o_out, &b[9], "out", 1, 'i', 1, 1, 0) ||
+        check_shape(&b[9], "out", b[8].b.shape[0], -1) ||
+        check_range(start, end, b[8].b.shape[0]))
         goto done;
     const int64_t *xs = b[8].b.buf;
     for (Py_ssize_t i = start; i < end; i++)
@@ -245,7 +245,7 @@ static PyObject *greedy_actions(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     res = Py_NewRef(Py_None);
 done:
-    pbuf_release(b, MT_BUFS + 2);
+    release(b, MT_BUFS + 2);
     return res;
 }
 
@@ -279,8 +279,8 @@ static double path_run(const Mt *mt, int64_t x0, const int64_t *y, Py_ssize_t ho
 
 /* mt and lower into b[0..7], the outcomes (ndim dimensions) into b[8], x0 a state */
 static int open_paths(PyObject *o_mt, PyObject *o_lower, PyObject *o_y, int ndim, long long x0,
-                      PBuf *b, Mt *mt) {
-    if (load_mt(o_mt, o_lower, b, mt) || pbuf_get(o_y, &b[8], "outcomes", ndim, 'i', SZ8, 0) ||
+                      Buf *b, Mt *mt) {
+    if (load_mt(o_mt, o_lower, b, mt) || get(o_y, &b[8], "outcomes", ndim, 'i', 8, 0, 0) ||
         state_ok(mt, x0, "x0", -1))
         return -1;
     return 0;
@@ -291,7 +291,7 @@ PyDoc_STRVAR(greedy_returns_doc,
              "out[p]: the discounted return of path p from x0 under outcomes[p] (int64, (P, H)),"
              " minus (cv) the control variate, for start <= p < end. Releases the GIL.");
 
-static PyObject *greedy_returns(PyObject *self, PyObject *args) {
+static PyObject *greedy_returns(PyObject *Py_UNUSED(self), PyObject *args) {
     long long x0;
     PyObject *o_y, *o_lower, *o_mt, *o_out;
     int cv;
@@ -299,14 +299,14 @@ static PyObject *greedy_returns(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "LOOOpOnn", &x0, &o_y, &o_lower, &o_mt, &cv, &o_out, &start,
                           &end))
         return NULL;
-    PBuf b[MT_BUFS + 2];
+    Buf b[MT_BUFS + 2];
     memset(b, 0, sizeof b);
     Mt mt;
     PyObject *res = NULL;
     if (open_paths(o_mt, o_lower, o_y, 2, x0, b, &mt) ||
-        pbuf_get(o_out, &b[9], "out", 1, 'f', 0, 1) ||
-        pbuf_shape(&b[9], "out", b[8].b.shape[0], -1) ||
-        range_ok(start, end, b[8].b.shape[0], "paths") ||
+        get(o_out, &b[9], "out", 1, 'f', 0, 1, 0) ||
+        check_shape(&b[9], "out", b[8].b.shape[0], -1) ||
+        check_range(start, end, b[8].b.shape[0]) ||
         outcomes_ok(b[8].b.buf, start * b[8].b.shape[1], end * b[8].b.shape[1], mt.pm.m))
         goto done;
     Py_ssize_t horizon = b[8].b.shape[1];
@@ -320,7 +320,7 @@ static PyObject *greedy_returns(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     res = Py_NewRef(Py_None);
 done:
-    pbuf_release(b, MT_BUFS + 2);
+    release(b, MT_BUFS + 2);
     return res;
 }
 
@@ -329,20 +329,20 @@ PyDoc_STRVAR(greedy_trajectory_doc,
              "One trajectory of pi_s from x0 under outcomes (int64, (T,)): states[t] "
              "(t = 0..T) and actions[t] (t < T), int64. Releases the GIL.");
 
-static PyObject *greedy_trajectory(PyObject *self, PyObject *args) {
+static PyObject *greedy_trajectory(PyObject *Py_UNUSED(self), PyObject *args) {
     long long x0;
     PyObject *o_y, *o_lower, *o_mt, *o_states, *o_actions;
     if (!PyArg_ParseTuple(args, "LOOOOO", &x0, &o_y, &o_lower, &o_mt, &o_states, &o_actions))
         return NULL;
-    PBuf b[MT_BUFS + 3];
+    Buf b[MT_BUFS + 3];
     memset(b, 0, sizeof b);
     Mt mt;
     PyObject *res = NULL;
     if (open_paths(o_mt, o_lower, o_y, 1, x0, b, &mt) ||
-        pbuf_get(o_states, &b[9], "states", 1, 'i', SZ8, 1) ||
-        pbuf_get(o_actions, &b[10], "actions", 1, 'i', SZ8, 1) ||
-        pbuf_shape(&b[9], "states", b[8].b.shape[0] + 1, -1) ||
-        pbuf_shape(&b[10], "actions", b[8].b.shape[0], -1) ||
+        get(o_states, &b[9], "states", 1, 'i', 8, 1, 0) ||
+        get(o_actions, &b[10], "actions", 1, 'i', 8, 1, 0) ||
+        check_shape(&b[9], "states", b[8].b.shape[0] + 1, -1) ||
+        check_shape(&b[10], "actions", b[8].b.shape[0], -1) ||
         outcomes_ok(b[8].b.buf, 0, b[8].b.shape[0], mt.pm.m))
         goto done;
     Py_BEGIN_ALLOW_THREADS
@@ -352,7 +352,7 @@ static PyObject *greedy_trajectory(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     res = Py_NewRef(Py_None);
 done:
-    pbuf_release(b, MT_BUFS + 3);
+    release(b, MT_BUFS + 3);
     return res;
 }
 
@@ -372,7 +372,7 @@ PyDoc_STRVAR(simulate_doc,
              " each; r_loiters, r_done, r_merged, r_merged_delay zeroed by the caller), the "
              "counts (int64, 8) as the module says. Releases the GIL.");
 
-static PyObject *simulate(PyObject *self, PyObject *args) {
+static PyObject *simulate(PyObject *Py_UNUSED(self), PyObject *args) {
     long long x0, n_nodes, gamma;
     int check;
     PyObject *o_pol, *o_succ, *o_comps, *o_st, *o_y, *o_r[8], *o_counts;
@@ -382,27 +382,27 @@ static PyObject *simulate(PyObject *self, PyObject *args) {
         return NULL;
     static const char *const r_names[8] = {"r_station", "r_arrival", "r_start", "r_visit",
                                            "r_loiters", "r_done", "r_merged", "r_merged_delay"};
-    PBuf b[14];
+    Buf b[14];
     memset(b, 0, sizeof b);
     PyObject *res = NULL;
     int64_t *scratch = NULL;
-    if (pbuf_get(o_pol, &b[0], "policy", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_succ, &b[1], "successors", 3, 'i', SZ4 | SZ8, 0) ||
-        pbuf_get(o_comps, &b[2], "comps", 2, 'i', SZ4 | SZ8, 0) ||
-        pbuf_get(o_st, &b[3], "stations", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_y, &b[4], "outcomes", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_counts, &b[5], "counts", 1, 'i', SZ8, 1))
+    if (get(o_pol, &b[0], "policy", 1, 'i', 8, 0, 0) ||
+        get(o_succ, &b[1], "successors", 3, 'i', S_IDX, 0, 0) ||
+        get(o_comps, &b[2], "comps", 2, 'i', S_IDX, 0, 0) ||
+        get(o_st, &b[3], "stations", 1, 'i', 8, 0, 0) ||
+        get(o_y, &b[4], "outcomes", 1, 'i', 8, 0, 0) ||
+        get(o_counts, &b[5], "counts", 1, 'i', 8, 1, 0))
         goto done;
     for (int i = 0; i < 8; i++)
-        if (pbuf_get(o_r[i], &b[6 + i], r_names[i], 1, i == 5 ? 'b' : 'i', SZ8, 1))
+        if (get(o_r[i], &b[6 + i], r_names[i], 1, i == 5 ? 'b' : 'i', 8, 1, 0))
             goto done;
     Py_ssize_t n = b[1].b.shape[0], A = b[1].b.shape[1], L = b[1].b.shape[2];
     Py_ssize_t m = b[3].b.shape[0], n_steps = b[4].b.shape[0];
-    if (pbuf_shape(&b[0], "policy", n, -1) || pbuf_shape(&b[2], "comps", n, 3 + m) ||
-        pbuf_shape(&b[5], "counts", C_LEN + 1, -1))
+    if (check_shape(&b[0], "policy", n, -1) || check_shape(&b[2], "comps", n, 3 + m) ||
+        check_shape(&b[5], "counts", C_LEN + 1, -1))
         goto done;
     for (int i = 0; i < 8; i++)
-        if (pbuf_shape(&b[6 + i], r_names[i], n_steps + 1, -1))
+        if (check_shape(&b[6 + i], r_names[i], n_steps + 1, -1))
             goto done;
     if (n_nodes < 1 || m < 1 || x0 < 0 || x0 >= n) {
         PyErr_Format(PyExc_ValueError, "simulate: N = %lld (>= 1), %zd stations (>= 1), start "
@@ -425,7 +425,7 @@ static PyObject *simulate(PyObject *self, PyObject *args) {
     int64_t *pend = scratch, *arr = scratch + m, *visit = scratch + 2 * m;
     int64_t *mcount = scratch + 3 * m, *msum = scratch + 4 * m, *nxt = scratch + 5 * m;
     const int64_t *policy = b[0].b.buf, *stations = b[3].b.buf;
-    const PBuf *succ = &b[1], *comps = &b[2];
+    const Buf *succ = &b[1], *comps = &b[2];
     int64_t *counts = b[5].b.buf;
     int64_t *r_station = b[6].b.buf, *r_arrival = b[7].b.buf, *r_start = b[8].b.buf;
     int64_t *r_visit = b[9].b.buf, *r_loiters = b[10].b.buf, *r_merged = b[12].b.buf;
@@ -440,8 +440,8 @@ static PyObject *simulate(PyObject *self, PyObject *args) {
         counts[i] = 0;
     counts[C_FIRST] = -1;
     for (Py_ssize_t t = 0; t < n_steps; t++) {
-        int64_t l = pbuf_int(comps, x * width), w = pbuf_int(comps, x * width + 1);
-        int64_t d = pbuf_int(comps, x * width + 2);
+        int64_t l = buf_int(comps, x * width), w = buf_int(comps, x * width + 1);
+        int64_t d = buf_int(comps, x * width + 2);
         int64_t a = policy[x], yt = y[t];
         if (a < 0 || a >= A) {
             bad_x = x, bad_a = BAD_ACTION, bad_t = t;
@@ -492,7 +492,7 @@ static PyObject *simulate(PyObject *self, PyObject *args) {
                 visit[j] = -1;
             }
         }
-        int64_t xn = pbuf_int(succ, ((Py_ssize_t)x * A + a) * L + yt);
+        int64_t xn = buf_int(succ, ((Py_ssize_t)x * A + a) * L + yt);
         if (xn < 0 || xn >= n) {
             bad_x = x, bad_a = xn, bad_t = t;
             break;
@@ -509,7 +509,7 @@ static PyObject *simulate(PyObject *self, PyObject *args) {
                 nxt[2] = d + 1;
             }
             for (Py_ssize_t j = 0; j < m; j++) {
-                int64_t tj = pbuf_int(comps, x * width + 3 + j), v;
+                int64_t tj = buf_int(comps, x * width + 3 + j), v;
                 if (u == 0 && j == jl)
                     v = 0;
                 else if (tj > 0)
@@ -526,7 +526,7 @@ static PyObject *simulate(PyObject *self, PyObject *args) {
             }
             int mismatch = 0;
             for (Py_ssize_t k = 0; k < width; k++)
-                if (pbuf_int(comps, xn * width + k) != nxt[k])
+                if (buf_int(comps, xn * width + k) != nxt[k])
                     mismatch = 1;
             if (mismatch) {
                 counts[C_MISMATCH] += 1;
@@ -554,7 +554,7 @@ static PyObject *simulate(PyObject *self, PyObject *args) {
     res = Py_BuildValue("LLL", (long long)n_rec, (long long)n_unserviced, (long long)x);
 done:
     free(scratch);
-    pbuf_release(b, 14);
+    release(b, 14);
     return res;
 }
 

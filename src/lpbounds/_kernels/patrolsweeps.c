@@ -91,11 +91,11 @@ static const char *const PLANE_NAMES[P_LEN] = {"l", "w", "d", "k", "last", "loit
 
 /* The geometry's buffers b[0..3] (geo, planes, sp, weights), checked exactly. */
 static int load_geo(PyObject *o_geo, PyObject *o_planes, PyObject *o_sp, PyObject *o_w,
-                    PBuf *b, Geo *g) {
-    if (pbuf_get(o_geo, &b[0], "geo", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_planes, &b[1], "planes", 2, 'i', SZ8, 0) ||
-        pbuf_get(o_sp, &b[2], "sp", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_w, &b[3], "weights", 2, 'i', SZ8, 0) || pbuf_shape(&b[0], "geo", G_LEN, -1))
+                    Buf *b, Geo *g) {
+    if (get(o_geo, &b[0], "geo", 1, 'i', 8, 0, 0) ||
+        get(o_planes, &b[1], "planes", 2, 'i', 8, 0, 0) ||
+        get(o_sp, &b[2], "sp", 1, 'i', 8, 0, 0) ||
+        get(o_w, &b[3], "weights", 2, 'i', 8, 0, 0) || check_shape(&b[0], "geo", G_LEN, -1))
         return -1;
     const int64_t *geo = b[0].b.buf;
     PModel *pm = &g->pm;
@@ -110,8 +110,8 @@ static int load_geo(PyObject *o_geo, PyObject *o_planes, PyObject *o_sp, PyObjec
             return -1;
         }
     g->n_planes = 2 * pm->N + pm->m * pm->D;
-    if (pbuf_shape(&b[2], "sp", pm->N, -1) || pbuf_shape(&b[1], "planes", g->n_planes, P_LEN) ||
-        pbuf_shape(&b[3], "weights", pm->m + 1, pm->m))
+    if (check_shape(&b[2], "sp", pm->N, -1) || check_shape(&b[1], "planes", g->n_planes, P_LEN) ||
+        check_shape(&b[3], "weights", pm->m + 1, pm->m))
         return -1;
     /* the stations from sp: stations[k] is the node of position k */
     const int64_t *sp = b[2].b.buf;
@@ -159,13 +159,13 @@ static int load_geo(PyObject *o_geo, PyObject *o_planes, PyObject *o_sp, PyObjec
 }
 
 /* probs (m + 1,), inc (D + 1,), pent (Gamma + 1,) into b[0..2] */
-static int load_floats(PyObject *o_p, PyObject *o_inc, PyObject *o_pent, PBuf *b, const Geo *g) {
-    if (pbuf_get(o_p, &b[0], "probs", 1, 'f', 0, 0) ||
-        pbuf_get(o_inc, &b[1], "inc", 1, 'f', 0, 0) ||
-        pbuf_get(o_pent, &b[2], "pent", 1, 'f', 0, 0) ||
-        pbuf_shape(&b[0], "probs", g->pm.m + 1, -1) ||
-        pbuf_shape(&b[1], "inc", g->pm.D + 1, -1) ||
-        pbuf_shape(&b[2], "pent", g->pm.radix, -1))
+static int load_floats(PyObject *o_p, PyObject *o_inc, PyObject *o_pent, Buf *b, const Geo *g) {
+    if (get(o_p, &b[0], "probs", 1, 'f', 0, 0, 0) ||
+        get(o_inc, &b[1], "inc", 1, 'f', 0, 0, 0) ||
+        get(o_pent, &b[2], "pent", 1, 'f', 0, 0, 0) ||
+        check_shape(&b[0], "probs", g->pm.m + 1, -1) ||
+        check_shape(&b[1], "inc", g->pm.D + 1, -1) ||
+        check_shape(&b[2], "pent", g->pm.radix, -1))
         return -1;
     return 0;
 }
@@ -427,7 +427,7 @@ static int chunks_ok(Py_ssize_t nchunks, Py_ssize_t c0, Py_ssize_t c1) {
         PyErr_Format(PyExc_ValueError, "nchunks must be >= 1; got %zd", nchunks);
         return -1;
     }
-    return range_ok(c0, c1, nchunks, "chunks");
+    return check_range(c0, c1, nchunks);
 }
 
 /* numba's min and max: the first of the extremes, by strict comparison */
@@ -437,7 +437,7 @@ static int chunks_ok(Py_ssize_t nchunks, Py_ssize_t c0, Py_ssize_t c1) {
 /* ------------------------------------------------------------------ opening a call */
 /* The geometry into b[0..3], the chunk range and the walk's buffers: 0, or -1 with the
  * exception set. */
-static int open_walk(PyObject *const *o_geo, PBuf *b, Geo *g, Walk *wk, Py_ssize_t nchunks,
+static int open_walk(PyObject *const *o_geo, Buf *b, Geo *g, Walk *wk, Py_ssize_t nchunks,
                      Py_ssize_t c0, Py_ssize_t c1) {
     wk->acc = NULL;
     if (load_geo(o_geo[0], o_geo[1], o_geo[2], o_geo[3], b, g) || chunks_ok(nchunks, c0, c1))
@@ -446,9 +446,9 @@ static int open_walk(PyObject *const *o_geo, PBuf *b, Geo *g, Walk *wk, Py_ssize
 }
 
 /* The end of a call: the walk's buffers and the arrays released; ``res`` or NULL. */
-static PyObject *close_walk(PyObject *res, Walk *wk, PBuf *b, int nb) {
+static PyObject *close_walk(PyObject *res, Walk *wk, Buf *b, int nb) {
     free(wk->acc);
-    pbuf_release(b, nb);
+    release(b, nb);
     return res;
 }
 
@@ -573,18 +573,18 @@ static PyObject *sweep(PyObject *args, int policy) {
     if (!PyArg_ParseTuple(args, "OOOOOOOdOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5],
                           &o[6], &lam, &o[7], &o[8], &o[9], &nchunks, &c0, &c1))
         return NULL;
-    PBuf b[10];
+    Buf b[10];
     memset(b, 0, sizeof b);
     Geo geo;
     const Geo *g = &geo;
     Walk wk;
-    PBuf *v = &b[policy ? 8 : 7], *out = &b[policy ? 9 : 8], *a = &b[policy ? 7 : 9];
+    Buf *v = &b[policy ? 8 : 7], *out = &b[policy ? 9 : 8], *a = &b[policy ? 7 : 9];
     if (open_walk(o, b, &geo, &wk, nchunks, c0, c1) || load_floats(o[4], o[5], o[6], b + 4, g) ||
-        pbuf_get(o[policy ? 8 : 7], v, "v", 1, 'f', 0, 0) ||
-        pbuf_get(o[policy ? 9 : 8], out, "out", 1, 'f', 0, 1) ||
-        pbuf_get(o[policy ? 7 : 9], a, policy ? "act" : "arg", 1, 'i', SZ1, !policy) ||
-        pbuf_shape(v, "v", g->pm.n_states, -1) || pbuf_shape(out, "out", g->pm.n_states, -1) ||
-        pbuf_shape(a, policy ? "act" : "arg", g->pm.n_states, -1))
+        get(o[policy ? 8 : 7], v, "v", 1, 'f', 0, 0, 0) ||
+        get(o[policy ? 9 : 8], out, "out", 1, 'f', 0, 1, 0) ||
+        get(o[policy ? 7 : 9], a, policy ? "act" : "arg", 1, 'i', 1, !policy, 0) ||
+        check_shape(v, "v", g->pm.n_states, -1) || check_shape(out, "out", g->pm.n_states, -1) ||
+        check_shape(a, policy ? "act" : "arg", g->pm.n_states, -1))
         return close_walk(NULL, &wk, b, 10);
     double lo = INFINITY, hi = -INFINITY;
     int8_t *acts = a->b.buf;
@@ -607,7 +607,7 @@ PyDoc_STRVAR(max_sweep_doc,
              "out = T v on the chunks c0 <= c < c1 (the first maximising action in arg, int8);"
              " returns the min and max of out - v over them. Releases the GIL.");
 
-static PyObject *max_sweep(PyObject *self, PyObject *args) { return sweep(args, 0); }
+static PyObject *max_sweep(PyObject *Py_UNUSED(self), PyObject *args) { return sweep(args, 0); }
 
 PyDoc_STRVAR(policy_sweep_doc,
              "policy_sweep(geo, planes, sp, weights, probs, inc, pent, discount, act, v, out, "
@@ -616,7 +616,7 @@ PyDoc_STRVAR(policy_sweep_doc,
              "min and max of out - v over them. A ValueError names the first state whose "
              "action is not allowed. Releases the GIL.");
 
-static PyObject *policy_sweep(PyObject *self, PyObject *args) { return sweep(args, 1); }
+static PyObject *policy_sweep(PyObject *Py_UNUSED(self), PyObject *args) { return sweep(args, 1); }
 
 /* ------------------------------------------------------------------ passes */
 /* What a pass does with one row: the states x .. x + nb - 1 (fast digits rw->t0 ..) of
@@ -645,7 +645,7 @@ static void walk_rows(const Geo *g, Walk *wk, int64_t n, int64_t unit, int64_t s
 }
 
 /* at most the model's states (a ValueError naming the array) */
-static int at_most_states(const PBuf *b, const char *name, const Geo *g) {
+static int at_most_states(const Buf *b, const char *name, const Geo *g) {
     if (b->b.shape[0] > g->pm.n_states) {
         PyErr_Format(PyExc_ValueError, "%s: length %zd, more than the %lld states", name,
                      b->b.shape[0], (long long)g->pm.n_states);
@@ -664,8 +664,8 @@ typedef struct {
     double best;
 } PassCtx;
 
-static int labels_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
-                      const Row *rw, int64_t x, int64_t nb) {
+static int labels_row(void *ctx, const Geo *g, Walk *Py_UNUSED(wk), int64_t Py_UNUSED(c),
+                      int64_t plane, const Row *rw, int64_t x, int64_t nb) {
     PassCtx *p = ctx;
     for (int64_t i = 0; i < nb; i++) {
         int64_t k = label_of(g, plane, rw, rw->t0 + i);
@@ -677,7 +677,7 @@ static int labels_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plan
     return 0;
 }
 
-static int decode_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+static int decode_row(void *ctx, const Geo *g, Walk *wk, int64_t Py_UNUSED(c), int64_t plane,
                       const Row *rw, int64_t x, int64_t nb) {
     PassCtx *p = ctx;
     int64_t m = g->pm.m;
@@ -694,8 +694,8 @@ static int decode_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plan
     return 0;
 }
 
-static int successor_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
-                         const Row *rw, int64_t x, int64_t nb) {
+static int successor_row(void *ctx, const Geo *g, Walk *wk, int64_t Py_UNUSED(c),
+                         int64_t Py_UNUSED(plane), const Row *rw, int64_t x, int64_t nb) {
     PassCtx *p = ctx;
     int64_t width = g->pm.m + 1, *out = (int64_t *)p->out;
     int a = (int)p->action;
@@ -707,8 +707,8 @@ static int successor_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t p
     return 0;
 }
 
-static int check_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
-                     const Row *rw, int64_t x, int64_t nb) {
+static int check_row(void *ctx, const Geo *Py_UNUSED(g), Walk *Py_UNUSED(wk), int64_t Py_UNUSED(c),
+                     int64_t Py_UNUSED(plane), const Row *rw, int64_t x, int64_t nb) {
     PassCtx *p = ctx;
     for (int64_t i = 0; i < nb; i++)
         if (p->act[x + i] == 2 && !loiter_at(rw->loiter, rw->t0 + i)) {
@@ -728,10 +728,10 @@ typedef struct {
 
 enum { LABELS, DECODE, SUCCESSORS, CHECK };
 static const ArrayPass ARRAY_PASSES[4] = {
-    {"labels", 1, SZ4 | SZ8, 1, 0, labels_row},
-    {"comps", 2, SZ8, 1, 1, decode_row},
-    {"out", 2, SZ8, 1, 1, successor_row},
-    {"act", 1, SZ1, 0, 0, check_row},
+    {"labels", 1, S_IDX, 1, 0, labels_row},
+    {"comps", 2, 8, 1, 1, decode_row},
+    {"out", 2, 8, 1, 1, successor_row},
+    {"act", 1, 1, 0, 0, check_row},
 };
 
 /* labels_pass, decode_range, successor_range, check_policy_pass: (geo, planes, sp, weights,
@@ -746,16 +746,16 @@ static PyObject *array_pass(PyObject *args, int which) {
                      : PyArg_ParseTuple(args, "OOOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4],
                                         &nchunks, &c0, &c1)))
         return NULL;
-    PBuf b[5];
+    Buf b[5];
     memset(b, 0, sizeof b);
     Geo g;
     Walk wk;
     if (open_walk(o, b, &g, &wk, nchunks, c0, c1) ||
-        pbuf_get(o[4], &b[4], ps->name, ps->ndim, 'i', ps->sizes, ps->writable))
+        get(o[4], &b[4], ps->name, ps->ndim, 'i', ps->sizes, ps->writable, 0))
         return close_walk(NULL, &wk, b, 5);
     int64_t n = b[4].b.shape[0], m = g.pm.m;
-    int bad = (which == DECODE && pbuf_shape(&b[4], "comps", -1, 3 + m)) ||
-              (which == SUCCESSORS && pbuf_shape(&b[4], "out", -1, m + 1)) ||
+    int bad = (which == DECODE && check_shape(&b[4], "comps", -1, 3 + m)) ||
+              (which == SUCCESSORS && check_shape(&b[4], "out", -1, m + 1)) ||
               (which != DECODE && at_most_states(&b[4], ps->name, &g));
     if (!bad && which == DECODE && (scalar < 0 || scalar > g.pm.n_states - n)) {
         PyErr_Format(PyExc_ValueError, "start0 = %lld: states start0 .. start0 + %lld are "
@@ -783,7 +783,9 @@ PyDoc_STRVAR(labels_pass_doc,
              "labels[x] (int32 or int64): the partition of every state x < labels.size of "
              "the chunks c0 <= c < c1. Releases the GIL.");
 
-static PyObject *labels_pass(PyObject *self, PyObject *args) { return array_pass(args, LABELS); }
+static PyObject *labels_pass(PyObject *Py_UNUSED(self), PyObject *args) {
+    return array_pass(args, LABELS);
+}
 
 PyDoc_STRVAR(decode_range_doc,
              "decode_range(geo, planes, sp, weights, start0, comps, nchunks, c0, c1)\n\n"
@@ -791,7 +793,9 @@ PyDoc_STRVAR(decode_range_doc,
              "the chunks c0 <= c < c1 of the rows of comps (int64, (n, 3 + m)). Releases the "
              "GIL.");
 
-static PyObject *decode_range(PyObject *self, PyObject *args) { return array_pass(args, DECODE); }
+static PyObject *decode_range(PyObject *Py_UNUSED(self), PyObject *args) {
+    return array_pass(args, DECODE);
+}
 
 PyDoc_STRVAR(successor_range_doc,
              "successor_range(geo, planes, sp, weights, action, out, nchunks, c0, c1)\n\n"
@@ -799,7 +803,7 @@ PyDoc_STRVAR(successor_range_doc,
              "(int64, (n, m + 1)), -1 where the action is not allowed, for the chunks "
              "c0 <= c < c1. Releases the GIL.");
 
-static PyObject *successor_range(PyObject *self, PyObject *args) {
+static PyObject *successor_range(PyObject *Py_UNUSED(self), PyObject *args) {
     return array_pass(args, SUCCESSORS);
 }
 
@@ -808,14 +812,14 @@ PyDoc_STRVAR(check_policy_pass_doc,
              "The first state x < act.size of the chunks c0 <= c < c1 whose action act[x] "
              "(int8) is a forbidden loiter, or -1. Releases the GIL.");
 
-static PyObject *check_policy_pass(PyObject *self, PyObject *args) {
+static PyObject *check_policy_pass(PyObject *Py_UNUSED(self), PyObject *args) {
     return array_pass(args, CHECK);
 }
 
 /* the fold of |R_u(x)| over the row: every value >= +0.0, so folding the chunks into one
  * maximum from 0.0 is numba's per-chunk maxima from 0.0, then their maximum */
-static int absmax_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
-                      const Row *rw, int64_t x, int64_t nb) {
+static int absmax_row(void *ctx, const Geo *g, Walk *Py_UNUSED(wk), int64_t Py_UNUSED(c),
+                      int64_t plane, const Row *rw, int64_t Py_UNUSED(x), int64_t nb) {
     PassCtx *p = ctx;
     double inc_d = p->inc[PL(plane, P_D)];
     for (int64_t i = 0; i < nb; i++) {
@@ -833,20 +837,20 @@ PyDoc_STRVAR(reward_absmax_pass_doc,
              "float\n\nmax |R_u(x)| over the allowed pairs of the chunks c0 <= c < c1. "
              "Releases the GIL.");
 
-static PyObject *reward_absmax_pass(PyObject *self, PyObject *args) {
+static PyObject *reward_absmax_pass(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o[6];
     Py_ssize_t nchunks, c0, c1;
     if (!PyArg_ParseTuple(args, "OOOOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5],
                           &nchunks, &c0, &c1))
         return NULL;
-    PBuf b[6];
+    Buf b[6];
     memset(b, 0, sizeof b);
     Geo g;
     Walk wk;
     if (open_walk(o, b, &g, &wk, nchunks, c0, c1) ||
-        pbuf_get(o[4], &b[4], "inc", 1, 'f', 0, 0) ||
-        pbuf_get(o[5], &b[5], "pent", 1, 'f', 0, 0) ||
-        pbuf_shape(&b[4], "inc", g.pm.D + 1, -1) || pbuf_shape(&b[5], "pent", g.pm.radix, -1))
+        get(o[4], &b[4], "inc", 1, 'f', 0, 0, 0) ||
+        get(o[5], &b[5], "pent", 1, 'f', 0, 0, 0) ||
+        check_shape(&b[4], "inc", g.pm.D + 1, -1) || check_shape(&b[5], "pent", g.pm.radix, -1))
         return close_walk(NULL, &wk, b, 6);
     PassCtx p = {NULL, 0, 0, NULL, -1, b[4].b.buf, b[5].b.buf, 0.0};
     Py_BEGIN_ALLOW_THREADS
@@ -954,10 +958,10 @@ static int greedy_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plan
 }
 
 /* labels read as partitions: entries in [0, n_parts) (ValueError naming the first not) */
-static int labels_ok(const PBuf *lab, int64_t n_parts) {
+static int labels_ok(const Buf *lab, int64_t n_parts) {
     Py_ssize_t n = lab->b.shape[0];
     for (Py_ssize_t i = 0; i < n; i++) {
-        int64_t k = pbuf_int(lab, i);
+        int64_t k = buf_int(lab, i);
         if (k < 0 || k >= n_parts) {
             PyErr_Format(PyExc_ValueError, "labels[%zd] = %lld is not a partition 0..%lld", i,
                          (long long)k, (long long)(n_parts - 1));
@@ -974,7 +978,7 @@ PyDoc_STRVAR(greedy_pass_doc,
              "w_low, and per chunk c the statistics fstats[c] (9 floats) and istats[c] (5 "
              "int64) of lpbounds.patrol.sweeps (F_*, I_*). Releases the GIL.");
 
-static PyObject *greedy_pass(PyObject *self, PyObject *args) {
+static PyObject *greedy_pass(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o[15];
     GreedyCtx p;
     Py_ssize_t nchunks, c0, c1;
@@ -982,24 +986,24 @@ static PyObject *greedy_pass(PyObject *self, PyObject *args) {
                           &o[5], &o[6], &p.lam, &o[7], &o[8], &o[9], &o[10], &o[11], &p.tie_rtol,
                           &p.loss_tol, &o[12], &o[13], &o[14], &nchunks, &c0, &c1))
         return NULL;
-    PBuf b[15];
+    Buf b[15];
     memset(b, 0, sizeof b);
     Geo g;
     Walk wk;
     static const char *const names[8] = {"v", "labels", "w_low", "v_up", "pistar", "pi_s",
                                          "fstats", "istats"};
     static const char kinds[8] = {'f', 'i', 'f', 'f', 'i', 'i', 'f', 'i'};
-    static const int sizes[8] = {0, SZ4 | SZ8, 0, 0, SZ1, SZ1, 0, SZ8};
+    static const int sizes[8] = {0, S_IDX, 0, 0, 1, 1, 0, 8};
     if (open_walk(o, b, &g, &wk, nchunks, c0, c1) || load_floats(o[4], o[5], o[6], b + 4, &g))
         return close_walk(NULL, &wk, b, 15);
     for (int i = 0; i < 8; i++)
-        if (pbuf_get(o[7 + i], &b[7 + i], names[i], i < 6 ? 1 : 2, kinds[i], sizes[i], i >= 5))
+        if (get(o[7 + i], &b[7 + i], names[i], i < 6 ? 1 : 2, kinds[i], sizes[i], i >= 5, 0))
             return close_walk(NULL, &wk, b, 15);
     Py_ssize_t n = b[7].b.shape[0], n_parts = b[9].b.shape[0];
-    if (at_most_states(&b[7], "v", &g) || pbuf_shape(&b[8], "labels", n, -1) ||
-        pbuf_shape(&b[10], "v_up", n_parts, -1) || pbuf_shape(&b[11], "pistar", n, -1) ||
-        pbuf_shape(&b[12], "pi_s", n, -1) || pbuf_shape(&b[13], "fstats", nchunks, F_LEN) ||
-        pbuf_shape(&b[14], "istats", nchunks, I_LEN) || labels_ok(&b[8], n_parts))
+    if (at_most_states(&b[7], "v", &g) || check_shape(&b[8], "labels", n, -1) ||
+        check_shape(&b[10], "v_up", n_parts, -1) || check_shape(&b[11], "pistar", n, -1) ||
+        check_shape(&b[12], "pi_s", n, -1) || check_shape(&b[13], "fstats", nchunks, F_LEN) ||
+        check_shape(&b[14], "istats", nchunks, I_LEN) || labels_ok(&b[8], n_parts))
         return close_walk(NULL, &wk, b, 15);
     p.probs = b[4].b.buf;
     p.inc = b[5].b.buf;
@@ -1039,7 +1043,7 @@ typedef struct {
     int64_t *istats;
 } VsubCtx;
 
-static int vsub_row(void *ctx, const Geo *g, Walk *wk, int64_t c, int64_t plane,
+static int vsub_row(void *ctx, const Geo *g, Walk *Py_UNUSED(wk), int64_t c, int64_t plane,
                     const Row *rw, int64_t x, int64_t nb) {
     const VsubCtx *p = ctx;
     double *f = p->fstats + c * S_LEN;
@@ -1072,25 +1076,26 @@ PyDoc_STRVAR(vsub_pass_doc,
              "lower bound) with its state, into fstats[c] (4 floats) and istats[c] (3 int64). "
              "Releases the GIL.");
 
-static PyObject *vsub_pass(PyObject *self, PyObject *args) {
+static PyObject *vsub_pass(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o[9];
     Py_ssize_t nchunks, c0, c1;
     if (!PyArg_ParseTuple(args, "OOOOOOOOOnnn", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
                           &o[7], &o[8], &nchunks, &c0, &c1))
         return NULL;
-    PBuf b[9];
+    Buf b[9];
     memset(b, 0, sizeof b);
     Geo g;
     Walk wk;
     if (open_walk(o, b, &g, &wk, nchunks, c0, c1) ||
-        pbuf_get(o[4], &b[4], "vstar", 1, 'f', 0, 0) ||
-        pbuf_get(o[5], &b[5], "vsub", 1, 'f', 0, 0) ||
-        pbuf_get(o[6], &b[6], "w_low", 1, 'f', 0, 0) ||
-        pbuf_get(o[7], &b[7], "fstats", 2, 'f', 0, 1) ||
-        pbuf_get(o[8], &b[8], "istats", 2, 'i', SZ8, 1) || at_most_states(&b[4], "vstar", &g) ||
-        pbuf_shape(&b[5], "vsub", b[4].b.shape[0], -1) ||
-        pbuf_shape(&b[6], "w_low", g.pm.n_partitions, -1) ||
-        pbuf_shape(&b[7], "fstats", nchunks, S_LEN) || pbuf_shape(&b[8], "istats", nchunks, J_LEN))
+        get(o[4], &b[4], "vstar", 1, 'f', 0, 0, 0) ||
+        get(o[5], &b[5], "vsub", 1, 'f', 0, 0, 0) ||
+        get(o[6], &b[6], "w_low", 1, 'f', 0, 0, 0) ||
+        get(o[7], &b[7], "fstats", 2, 'f', 0, 1, 0) ||
+        get(o[8], &b[8], "istats", 2, 'i', 8, 1, 0) || at_most_states(&b[4], "vstar", &g) ||
+        check_shape(&b[5], "vsub", b[4].b.shape[0], -1) ||
+        check_shape(&b[6], "w_low", g.pm.n_partitions, -1) ||
+        check_shape(&b[7], "fstats", nchunks, S_LEN) ||
+        check_shape(&b[8], "istats", nchunks, J_LEN))
         return close_walk(NULL, &wk, b, 9);
     VsubCtx p = {b[4].b.buf, b[5].b.buf, b[6].b.buf, b[7].b.buf, b[8].b.buf};
     Py_BEGIN_ALLOW_THREADS
@@ -1115,23 +1120,23 @@ PyDoc_STRVAR(decode_states_doc,
              "(int16, (n, m)): lpbounds.patrol.model's encoding. A ValueError names an x[i] "
              "that is not a state. Releases the GIL.");
 
-static PyObject *decode_states(PyObject *self, PyObject *args) {
+static PyObject *decode_states(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_x, *o_st, *o_l, *o_w, *o_d, *o_tau;
     long long n_travel, radix, m, big_d;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OLLLLOOOOOnn", &o_x, &n_travel, &radix, &m, &big_d, &o_st,
                           &o_l, &o_w, &o_d, &o_tau, &start, &end))
         return NULL;
-    PBuf b[6];
+    Buf b[6];
     memset(b, 0, sizeof b);
     PyObject *res = NULL;
     PModel pm;
     memset(&pm, 0, sizeof pm);
-    if (pbuf_get(o_x, &b[0], "x", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_st, &b[1], "stations", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_l, &b[2], "l", 1, 'i', SZ8, 1) || pbuf_get(o_w, &b[3], "w", 1, 'i', SZ8, 1) ||
-        pbuf_get(o_d, &b[4], "d", 1, 'i', SZ8, 1) ||
-        pbuf_get(o_tau, &b[5], "tau", 2, 'i', SZ2, 1))
+    if (get(o_x, &b[0], "x", 1, 'i', 8, 0, 0) ||
+        get(o_st, &b[1], "stations", 1, 'i', 8, 0, 0) ||
+        get(o_l, &b[2], "l", 1, 'i', 8, 1, 0) || get(o_w, &b[3], "w", 1, 'i', 8, 1, 0) ||
+        get(o_d, &b[4], "d", 1, 'i', 8, 1, 0) ||
+        get(o_tau, &b[5], "tau", 2, 'i', 2, 1, 0))
         goto done;
     Py_ssize_t n = b[0].b.shape[0];
     pm.m = m;
@@ -1148,9 +1153,9 @@ static PyObject *decode_states(PyObject *self, PyObject *args) {
                      "m = %lld, D = %lld are not a patrol encoding", n_travel, radix, m, big_d);
         goto done;
     }
-    if (pbuf_shape(&b[1], "stations", m, -1) || pbuf_shape(&b[2], "l", n, -1) ||
-        pbuf_shape(&b[3], "w", n, -1) || pbuf_shape(&b[4], "d", n, -1) ||
-        pbuf_shape(&b[5], "tau", n, m) || range_ok(start, end, n, "states"))
+    if (check_shape(&b[1], "stations", m, -1) || check_shape(&b[2], "l", n, -1) ||
+        check_shape(&b[3], "w", n, -1) || check_shape(&b[4], "d", n, -1) ||
+        check_shape(&b[5], "tau", n, m) || check_range(start, end, n))
         goto done;
     const int64_t *x = b[0].b.buf;
     for (Py_ssize_t i = start; i < end; i++)
@@ -1176,7 +1181,7 @@ static PyObject *decode_states(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     res = Py_NewRef(Py_None);
 done:
-    pbuf_release(b, 6);
+    release(b, 6);
     return res;
 }
 
@@ -1187,7 +1192,7 @@ PyDoc_STRVAR(successor_states_doc,
              " alert at station j (column j + 1); lpbounds.patrol.model's dynamics. A loiter "
              "needs a station with d < D (ValueError naming the state). Releases the GIL.");
 
-static PyObject *successor_states(PyObject *self, PyObject *args) {
+static PyObject *successor_states(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_l, *o_w, *o_d, *o_tau, *o_sp, *o_wt, *o_wl, *o_out;
     long long action, n_nodes, big_d, gamma, radix, n_travel;
     Py_ssize_t start, end;
@@ -1195,18 +1200,18 @@ static PyObject *successor_states(PyObject *self, PyObject *args) {
                           &big_d, &gamma, &radix, &n_travel, &o_sp, &o_wt, &o_wl, &o_out, &start,
                           &end))
         return NULL;
-    PBuf b[8];
+    Buf b[8];
     memset(b, 0, sizeof b);
     PyObject *res = NULL;
     PModel pm;
     memset(&pm, 0, sizeof pm);
-    if (pbuf_get(o_l, &b[0], "l", 1, 'i', SZ8, 0) || pbuf_get(o_w, &b[1], "w", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_d, &b[2], "d", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_tau, &b[3], "tau", 2, 'i', SZ2, 0) ||
-        pbuf_get(o_sp, &b[4], "station_pos", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_wt, &b[5], "w_travel", 1, 'i', SZ8, 0) ||
-        pbuf_get(o_wl, &b[6], "w_loiter", 2, 'i', SZ8, 0) ||
-        pbuf_get(o_out, &b[7], "out", 2, 'i', SZ8, 1))
+    if (get(o_l, &b[0], "l", 1, 'i', 8, 0, 0) || get(o_w, &b[1], "w", 1, 'i', 8, 0, 0) ||
+        get(o_d, &b[2], "d", 1, 'i', 8, 0, 0) ||
+        get(o_tau, &b[3], "tau", 2, 'i', 2, 0, 0) ||
+        get(o_sp, &b[4], "station_pos", 1, 'i', 8, 0, 0) ||
+        get(o_wt, &b[5], "w_travel", 1, 'i', 8, 0, 0) ||
+        get(o_wl, &b[6], "w_loiter", 2, 'i', 8, 0, 0) ||
+        get(o_out, &b[7], "out", 2, 'i', 8, 1, 0))
         goto done;
     Py_ssize_t n = b[0].b.shape[0], m = b[3].b.shape[1];
     if (action < 0 || action > 2 || n_nodes < 1 || big_d < 1 || m < 1 || m > PATROL_MMAX) {
@@ -1214,10 +1219,10 @@ static PyObject *successor_states(PyObject *self, PyObject *args) {
                      " D = %lld (>= 1), m = %zd", action, n_nodes, big_d, m);
         goto done;
     }
-    if (pbuf_shape(&b[1], "w", n, -1) || pbuf_shape(&b[2], "d", n, -1) ||
-        pbuf_shape(&b[3], "tau", n, m) || pbuf_shape(&b[4], "station_pos", n_nodes, -1) ||
-        pbuf_shape(&b[5], "w_travel", m, -1) || pbuf_shape(&b[6], "w_loiter", m, m) ||
-        pbuf_shape(&b[7], "out", n, m + 1) || range_ok(start, end, n, "states"))
+    if (check_shape(&b[1], "w", n, -1) || check_shape(&b[2], "d", n, -1) ||
+        check_shape(&b[3], "tau", n, m) || check_shape(&b[4], "station_pos", n_nodes, -1) ||
+        check_shape(&b[5], "w_travel", m, -1) || check_shape(&b[6], "w_loiter", m, m) ||
+        check_shape(&b[7], "out", n, m + 1) || check_range(start, end, n))
         goto done;
     const int64_t *l = b[0].b.buf, *w = b[1].b.buf, *d = b[2].b.buf, *sp = b[4].b.buf;
     for (Py_ssize_t i = start; i < end; i++) {
@@ -1262,12 +1267,12 @@ static PyObject *successor_states(PyObject *self, PyObject *args) {
     Py_END_ALLOW_THREADS
     res = Py_NewRef(Py_None);
 done:
-    pbuf_release(b, 8);
+    release(b, 8);
     return res;
 }
 
 /* the arguments of a key: 0 <= l < N; a loiter key at a station */
-static int key_args_ok(long long l, long long d, const PBuf *sp, long long m) {
+static int key_args_ok(long long l, long long d, const Buf *sp, long long m) {
     if (m < 1 || m > PATROL_MMAX || l < 0 || l >= sp->b.shape[0]) {
         PyErr_Format(PyExc_ValueError, "a partition key needs 0 <= l < N = %zd and "
                      "1 <= m <= %d; got l = %lld, m = %lld", sp->b.shape[0], PATROL_MMAX, l, m);
@@ -1287,29 +1292,29 @@ PyDoc_STRVAR(key_index_doc,
              "-> int\n\nlpbounds.patrol.partitions.partition_index of one key: acode the alert"
              " pattern (station 0 the most significant of m bits), tb the largest delay.");
 
-static PyObject *key_index_py(PyObject *self, PyObject *args) {
+static PyObject *key_index_py(PyObject *Py_UNUSED(self), PyObject *args) {
     long long l, w, d, acode, tb, n_nodes, big_d, gamma, tbs, lbs, m;
     PyObject *o_sp;
     if (!PyArg_ParseTuple(args, "LLLLLOLLLLLL", &l, &w, &d, &acode, &tb, &o_sp, &n_nodes, &big_d,
                           &gamma, &tbs, &lbs, &m))
         return NULL;
-    PBuf b[1];
+    Buf b[1];
     memset(b, 0, sizeof b);
     PyObject *res = NULL;
-    if (pbuf_get(o_sp, &b[0], "station_pos", 1, 'i', SZ8, 0) || key_args_ok(l, d, &b[0], m))
+    if (get(o_sp, &b[0], "station_pos", 1, 'i', 8, 0, 0) || key_args_ok(l, d, &b[0], m))
         goto done;
     res = PyLong_FromLongLong(key_index(l, w, d, acode, tb, b[0].b.buf, n_nodes, big_d, gamma,
                                         tbs, lbs, m));
 done:
-    pbuf_release(b, 1);
+    release(b, 1);
     return res;
 }
 
 /* (acode, taubar) of a delay vector (alert_key_kernel) */
-static void alert_key(const PBuf *tau, int64_t *acode, int64_t *tb) {
+static void alert_key(const Buf *tau, int64_t *acode, int64_t *tb) {
     int64_t a = 0, t = 0;
     for (Py_ssize_t j = 0; j < tau->b.shape[0]; j++) {
-        int64_t v = pbuf_int(tau, j);
+        int64_t v = buf_int(tau, j);
         a = 2 * a + (v > 0 ? 1 : 0);
         if (v > t)
             t = v;
@@ -1322,25 +1327,25 @@ PyDoc_STRVAR(alert_key_doc,
              "alert_key(tau) -> (acode, taubar)\n\nThe alert pattern (station 0 the most "
              "significant bit) and the largest delay of one delay vector.");
 
-static PyObject *alert_key_py(PyObject *self, PyObject *args) {
+static PyObject *alert_key_py(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_tau;
     if (!PyArg_ParseTuple(args, "O", &o_tau))
         return NULL;
-    PBuf b[1];
+    Buf b[1];
     memset(b, 0, sizeof b);
-    if (pbuf_get(o_tau, &b[0], "tau", 1, 'i', SZ1 | SZ2 | SZ4 | SZ8, 0)) {
-        pbuf_release(b, 1);
+    if (get(o_tau, &b[0], "tau", 1, 'i', S_ANY, 0, 0)) {
+        release(b, 1);
         return NULL;
     }
     if (b[0].b.shape[0] > PATROL_MMAX) {
         PyErr_Format(PyExc_ValueError, "tau: %zd delays, more than %d stations",
                      b[0].b.shape[0], PATROL_MMAX);
-        pbuf_release(b, 1);
+        release(b, 1);
         return NULL;
     }
     int64_t acode, tb;
     alert_key(&b[0], &acode, &tb);
-    pbuf_release(b, 1);
+    release(b, 1);
     return Py_BuildValue("LL", (long long)acode, (long long)tb);
 }
 
@@ -1349,17 +1354,17 @@ PyDoc_STRVAR(state_partition_doc,
              "int\n\nThe partition of one state given by its components (tau its delay "
              "vector, length m).");
 
-static PyObject *state_partition_py(PyObject *self, PyObject *args) {
+static PyObject *state_partition_py(PyObject *Py_UNUSED(self), PyObject *args) {
     long long l, w, d, n_nodes, big_d, gamma, tbs, lbs;
     PyObject *o_tau, *o_sp;
     if (!PyArg_ParseTuple(args, "LLLOOLLLLL", &l, &w, &d, &o_tau, &o_sp, &n_nodes, &big_d, &gamma,
                           &tbs, &lbs))
         return NULL;
-    PBuf b[2];
+    Buf b[2];
     memset(b, 0, sizeof b);
     PyObject *res = NULL;
-    if (pbuf_get(o_tau, &b[0], "tau", 1, 'i', SZ1 | SZ2 | SZ4 | SZ8, 0) ||
-        pbuf_get(o_sp, &b[1], "station_pos", 1, 'i', SZ8, 0) ||
+    if (get(o_tau, &b[0], "tau", 1, 'i', S_ANY, 0, 0) ||
+        get(o_sp, &b[1], "station_pos", 1, 'i', 8, 0, 0) ||
         key_args_ok(l, d, &b[1], (long long)b[0].b.shape[0]))
         goto done;
     int64_t acode, tb;
@@ -1367,7 +1372,7 @@ static PyObject *state_partition_py(PyObject *self, PyObject *args) {
     res = PyLong_FromLongLong(key_index(l, w, d, acode, tb, b[1].b.buf, n_nodes, big_d, gamma,
                                         tbs, lbs, b[0].b.shape[0]));
 done:
-    pbuf_release(b, 2);
+    release(b, 2);
     return res;
 }
 

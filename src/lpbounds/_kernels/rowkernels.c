@@ -24,163 +24,10 @@
  * input makes these functions read or write outside their buffers. Plain C99: no VLAs, no
  * compiler extensions (it builds with MSVC as well as gcc and clang).
  */
-#define PY_SSIZE_T_CLEAN
-#include <Python.h>
-#include <math.h>
-#include <stdint.h>
-#include <string.h>
-
-#if defined(_MSC_VER) && !defined(__cplusplus)
-#define LPB_INLINE __inline
-#else
-#define LPB_INLINE inline
-#endif
-
-/* ------------------------------------------------------------------------------ buffers */
-
-enum { K_F = 1, K_I = 2, K_U = 4, K_B = 8 }; /* float64, signed, unsigned, bool */
-#define K_INT (K_I | K_U)
-#define S_ANY (1 | 2 | 4 | 8) /* item sizes, as a mask of the sizes themselves */
-#define S_IDX (4 | 8)         /* int32 or int64 */
-
-typedef struct {
-    Py_buffer b;
-    int held;
-    int kind; /* one of K_* */
-} Buf;
-
-/* the kind of a buffer's items in native byte order; 0 for anything else */
-static int kind_of(const Py_buffer *b) {
-    const char *f = b->format ? b->format : "B";
-    const uint16_t one = 1;
-    const char native_order = *(const char *)&one ? '<' : '>';
-    while (*f == '@' || *f == '=' || *f == native_order)
-        f++;
-    if (f[0] == '\0' || f[1] != '\0')
-        return 0;
-    switch (f[0]) {
-    case 'd':
-        return b->itemsize == 8 ? K_F : 0;
-    case 'b': case 'h': case 'i': case 'l': case 'q': case 'n':
-        return K_I;
-    case 'B': case 'H': case 'I': case 'L': case 'Q': case 'N':
-        return K_U;
-    case '?':
-        return b->itemsize == 1 ? K_B : 0;
-    default:
-        return 0;
-    }
-}
-
-/* A buffer of ``ndim`` dimensions, a kind in ``kinds`` and an item size in ``sizes``,
- * C-contiguous unless ``strided``; a TypeError naming the argument otherwise. */
-static int get(PyObject *o, Buf *out, const char *name, int ndim, int kinds, int sizes,
-               int writable, int strided) {
-    int flags = PyBUF_FORMAT | PyBUF_STRIDES | (writable ? PyBUF_WRITABLE : 0);
-    if (PyObject_GetBuffer(o, &out->b, flags) < 0) {
-        PyErr_Clear();
-        PyErr_Format(PyExc_TypeError, "%s: expected a%s array", name, writable ? " writable" : "");
-        return -1;
-    }
-    out->held = 1;
-    out->kind = kind_of(&out->b);
-    Py_ssize_t isz = out->b.itemsize;
-    int size_ok = (isz == 1 || isz == 2 || isz == 4 || isz == 8) && (isz & sizes);
-    if (!(out->kind & kinds) || out->b.ndim != ndim || !size_ok) {
-        PyErr_Format(PyExc_TypeError,
-                     "%s: expected a %d-D %s array; got %d-D with format '%s' (%zd bytes an item)",
-                     name, ndim,
-                     kinds == K_F ? "float64" : kinds == K_B ? "bool" : "integer",
-                     out->b.ndim, out->b.format ? out->b.format : "B", isz);
-        return -1;
-    }
-    if (!strided) {
-        Py_ssize_t s = isz;
-        for (int d = ndim - 1; d >= 0; d--) {
-            if (out->b.shape[d] > 1 && out->b.strides[d] != s) {
-                PyErr_Format(PyExc_TypeError, "%s: not C-contiguous", name);
-                return -1;
-            }
-            s *= out->b.shape[d];
-        }
-    }
-    return 0;
-}
-
-static void release(Buf *bs, int n) {
-    for (int i = 0; i < n; i++)
-        if (bs[i].held)
-            PyBuffer_Release(&bs[i].b);
-}
+#include "buffers.h"
 
 #define SHAPE(B, D) ((B).b.shape[D])
 #define DATA(B) ((char *)(B).b.buf)
-
-/* a ValueError saying how two shapes disagree, unless ``ok`` */
-static int need(int ok, const char *what) {
-    if (!ok)
-        PyErr_Format(PyExc_ValueError, "%s", what);
-    return ok ? 0 : -1;
-}
-
-/* [start, end) within [0, n] */
-static int check_range(Py_ssize_t start, Py_ssize_t end, Py_ssize_t n) {
-    if (start < 0 || end < start || end > n) {
-        PyErr_Format(PyExc_ValueError, "range [%zd, %zd) outside [0, %zd)", start, end, n);
-        return -1;
-    }
-    return 0;
-}
-
-/* entry i of an integer buffer (any size, signed or unsigned) */
-static LPB_INLINE int64_t ld(const char *p, Py_ssize_t size, int sgn, Py_ssize_t i) {
-    switch (size) {
-    case 1:
-        return sgn ? (int64_t)((const int8_t *)p)[i] : (int64_t)((const uint8_t *)p)[i];
-    case 2:
-        return sgn ? (int64_t)((const int16_t *)p)[i] : (int64_t)((const uint16_t *)p)[i];
-    case 4:
-        return sgn ? (int64_t)((const int32_t *)p)[i] : (int64_t)((const uint32_t *)p)[i];
-    default:
-        return ((const int64_t *)p)[i];
-    }
-}
-
-/* x into entry i of an integer buffer (the low bytes of its two's complement) */
-static LPB_INLINE void st(char *p, Py_ssize_t size, Py_ssize_t i, int64_t x) {
-    switch (size) {
-    case 1:
-        ((uint8_t *)p)[i] = (uint8_t)(uint64_t)x;
-        break;
-    case 2:
-        ((uint16_t *)p)[i] = (uint16_t)(uint64_t)x;
-        break;
-    case 4:
-        ((uint32_t *)p)[i] = (uint32_t)(uint64_t)x;
-        break;
-    default:
-        ((int64_t *)p)[i] = x;
-    }
-}
-
-/* An integer buffer as the loops read it: held in locals, which no store can alias (a
- * store through a uint8 pointer may alias anything in memory, a Buf included). */
-typedef struct {
-    char *p;
-    Py_ssize_t size;
-    int sgn;
-} Ix;
-
-static Ix ix(const Buf *b) {
-    Ix x;
-    x.p = (char *)b->b.buf;
-    x.size = b->b.itemsize;
-    x.sgn = b->kind == K_I;
-    return x;
-}
-
-#define LD(X, I) ld((X).p, (X).size, (X).sgn, (I))
-#define ST(X, I, V) st((X).p, (X).size, (I), (V))
 
 /* ------------------------------------------------------------------------------ errors */
 
@@ -277,9 +124,9 @@ typedef struct {
 
 static int get_rows(PyObject *reward, PyObject *targets, PyObject *probs, PyObject *v, double lam,
                     Buf *b, Rows *rw) {
-    if (get(reward, &b[0], "reward", 1, K_F, 8, 0, 0) ||
-        get(targets, &b[1], "targets", 2, K_I, S_IDX, 0, 0) ||
-        get(probs, &b[2], "probs", 2, K_F, 8, 0, 1) || get(v, &b[3], "v", 1, K_F, 8, 0, 0))
+    if (get(reward, &b[0], "reward", 1, 'f', 8, 0, 0) ||
+        get(targets, &b[1], "targets", 2, 'i', S_IDX, 0, 0) ||
+        get(probs, &b[2], "probs", 2, 'f', 8, 0, 1) || get(v, &b[3], "v", 1, 'f', 8, 0, 0))
         return -1;
     Py_ssize_t R = SHAPE(b[0], 0);
     if (need(SHAPE(b[1], 0) == R && SHAPE(b[2], 0) == R && SHAPE(b[2], 1) == SHAPE(b[1], 1),
@@ -301,7 +148,7 @@ static int get_rows(PyObject *reward, PyObject *targets, PyObject *probs, PyObje
 
 /* q = q_r(v) for targets of type TT; -1 (and *e) on a target outside v */
 #define DEF_Q_ROW(SUF, TT)                                                                 \
-    static LPB_INLINE int q_row_##SUF(const Rows *rw, Py_ssize_t r, double *q, Bad *e) {    \
+    Py_LOCAL_INLINE(int) q_row_##SUF(const Rows *rw, Py_ssize_t r, double *q, Bad *e) {    \
         const TT *t = (const TT *)rw->targets + (size_t)r * (size_t)rw->L;                 \
         const char *p = rw->probs + r * rw->ps0;                                           \
         double acc = 0.0;                                                                  \
@@ -331,7 +178,7 @@ PyDoc_STRVAR(q_values_doc,
              "out[r] = reward[r] + discount * sum_l probs[r, l] v[targets[r, l]] for rows "
              "start <= r < end. Releases the GIL.");
 
-static PyObject *q_values(PyObject *self, PyObject *args) {
+static PyObject *q_values(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_rew, *o_t, *o_p, *o_v, *o_out;
     double lam;
     Py_ssize_t start, end;
@@ -341,7 +188,7 @@ static PyObject *q_values(PyObject *self, PyObject *args) {
     call_init(&c);
     Rows rw;
     if (get_rows(o_rew, o_t, o_p, o_v, lam, c.b, &rw) ||
-        get(o_out, &c.b[4], "out", 1, K_F, 8, 1, 0) ||
+        get(o_out, &c.b[4], "out", 1, 'f', 8, 1, 0) ||
         need(SHAPE(c.b[4], 0) == rw.R, "out needs one entry per row") ||
         check_range(start, end, rw.R))
         return call_end(&c, NULL);
@@ -397,7 +244,7 @@ PyDoc_STRVAR(bellman_maxmin_doc,
              "q_r over that action's rows; arg[i] the minimising row of the first maximising "
              "action. Releases the GIL.");
 
-static PyObject *bellman_maxmin(PyObject *self, PyObject *args) {
+static PyObject *bellman_maxmin(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_ip, *o_act, *o_rew, *o_t, *o_p, *o_v, *o_out, *o_arg;
     double lam;
     Py_ssize_t start, end;
@@ -408,10 +255,10 @@ static PyObject *bellman_maxmin(PyObject *self, PyObject *args) {
     call_init(&c);
     Rows rw;
     if (get_rows(o_rew, o_t, o_p, o_v, lam, c.b, &rw) ||
-        get(o_ip, &c.b[4], "indptr", 1, K_I, 8, 0, 0) ||
-        get(o_act, &c.b[5], "action", 1, K_I, 4, 0, 0) ||
-        get(o_out, &c.b[6], "out", 1, K_F, 8, 1, 0) ||
-        get(o_arg, &c.b[7], "arg", 1, K_I, 8, 1, 0))
+        get(o_ip, &c.b[4], "indptr", 1, 'i', 8, 0, 0) ||
+        get(o_act, &c.b[5], "action", 1, 'i', 4, 0, 0) ||
+        get(o_out, &c.b[6], "out", 1, 'f', 8, 1, 0) ||
+        get(o_arg, &c.b[7], "arg", 1, 'i', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t n = SHAPE(c.b[4], 0) - 1;
     if (need(n >= 0, "indptr: empty (it has one entry more than the owners)") ||
@@ -479,7 +326,7 @@ PyDoc_STRVAR(hash_rows_doc,
              "A 64-bit hash of (owner, action, targets, probabilities' bits) for rows "
              "start <= r < end, into out (uint64). Releases the GIL.");
 
-static PyObject *hash_rows(PyObject *self, PyObject *args) {
+static PyObject *hash_rows(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_own, *o_act, *o_t, *o_pb, *o_out;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOOnn", &o_own, &o_act, &o_t, &o_pb, &o_out, &start, &end))
@@ -487,11 +334,11 @@ static PyObject *hash_rows(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_own, &b[0], "owner", 1, K_INT, S_ANY, 0, 0) ||
-        get(o_act, &b[1], "action", 1, K_INT, S_ANY, 0, 0) ||
-        get(o_t, &b[2], "targets", 2, K_INT, S_ANY, 0, 0) ||
-        get(o_pb, &b[3], "probbits", 2, K_INT, 8, 0, 0) ||
-        get(o_out, &b[4], "out", 1, K_U, 8, 1, 0))
+    if (get(o_own, &b[0], "owner", 1, 'n', S_ANY, 0, 0) ||
+        get(o_act, &b[1], "action", 1, 'n', S_ANY, 0, 0) ||
+        get(o_t, &b[2], "targets", 2, 'n', S_ANY, 0, 0) ||
+        get(o_pb, &b[3], "probbits", 2, 'n', 8, 0, 0) ||
+        get(o_out, &b[4], "out", 1, 'u', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t R = SHAPE(b[0], 0);
     if (need(SHAPE(b[1], 0) == R && SHAPE(b[2], 0) == R && SHAPE(b[3], 0) == R &&
@@ -510,8 +357,8 @@ static PyObject *hash_rows(PyObject *self, PyObject *args) {
 /* succ (n, A, L) and allowed (n, A) into b[0], b[1]: the pair (x, a) has its successors at
  * (x A + a) L */
 static int get_pairs(PyObject *o_succ, PyObject *o_allowed, Buf *b) {
-    if (get(o_succ, &b[0], "succ", 3, K_I, S_IDX, 0, 0) ||
-        get(o_allowed, &b[1], "allowed", 2, K_B, 1, 0, 0))
+    if (get(o_succ, &b[0], "succ", 3, 'i', S_IDX, 0, 0) ||
+        get(o_allowed, &b[1], "allowed", 2, 'b', 1, 0, 0))
         return -1;
     return need(SHAPE(b[1], 0) == SHAPE(b[0], 0) && SHAPE(b[1], 1) == SHAPE(b[0], 1),
                 "succ and allowed: shapes differ (n, A, L) and (n, A)");
@@ -545,14 +392,14 @@ PyDoc_STRVAR(ps_mark_doc,
              "ps_mark(succ, allowed, seen, start, end)\n\nseen[succ[x, u, 0]] = True for "
              "every allowed pair of the states start <= x < end. Releases the GIL.");
 
-static PyObject *ps_mark(PyObject *self, PyObject *args) {
+static PyObject *ps_mark(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_s, *o_a, *o_seen;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOnn", &o_s, &o_a, &o_seen, &start, &end))
         return NULL;
     Call c;
     call_init(&c);
-    if (get_pairs(o_s, o_a, c.b) || get(o_seen, &c.b[2], "seen", 1, K_B, 1, 1, 0) ||
+    if (get_pairs(o_s, o_a, c.b) || get(o_seen, &c.b[2], "seen", 1, 'b', 1, 1, 0) ||
         check_range(start, end, SHAPE(c.b[0], 0)))
         return call_end(&c, NULL);
     int failed;
@@ -609,7 +456,7 @@ PyDoc_STRVAR(ps_fill_doc,
              "start <= x < end: first[x, u] = post_id[succ[x, u, 0]] (-1 if disallowed) and "
              "outcomes[first[x, u]] = succ[x, u]. Releases the GIL.");
 
-static PyObject *ps_fill(PyObject *self, PyObject *args) {
+static PyObject *ps_fill(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_s, *o_a, *o_pid, *o_oc, *o_first;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOOnn", &o_s, &o_a, &o_pid, &o_oc, &o_first, &start, &end))
@@ -617,9 +464,9 @@ static PyObject *ps_fill(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get_pairs(o_s, o_a, b) || get(o_pid, &b[2], "post_id", 1, K_I, S_IDX, 0, 0) ||
-        get(o_oc, &b[3], "outcomes", 2, K_I, (int)b[0].b.itemsize, 1, 0) ||
-        get(o_first, &b[4], "first", 2, K_I, (int)b[2].b.itemsize, 1, 0))
+    if (get_pairs(o_s, o_a, b) || get(o_pid, &b[2], "post_id", 1, 'i', S_IDX, 0, 0) ||
+        get(o_oc, &b[3], "outcomes", 2, 'i', (int)b[0].b.itemsize, 1, 0) ||
+        get(o_first, &b[4], "first", 2, 'i', (int)b[2].b.itemsize, 1, 0))
         return call_end(&c, NULL);
     if (need(SHAPE(b[3], 1) == SHAPE(b[0], 2), "outcomes: one column per outcome of succ") ||
         need(SHAPE(b[4], 0) == SHAPE(b[0], 0) && SHAPE(b[4], 1) == SHAPE(b[0], 1),
@@ -658,7 +505,7 @@ PyDoc_STRVAR(ps_verify_doc,
              "(first >= 0) of the states start <= x < end has a tuple other than its "
              "outcomes row, else 0. Releases the GIL.");
 
-static PyObject *ps_verify(PyObject *self, PyObject *args) {
+static PyObject *ps_verify(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_s, *o_first, *o_oc;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOnn", &o_s, &o_first, &o_oc, &start, &end))
@@ -666,9 +513,9 @@ static PyObject *ps_verify(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_s, &b[0], "succ", 3, K_I, S_IDX, 0, 0) ||
-        get(o_first, &b[1], "first", 2, K_I, S_IDX, 0, 0) ||
-        get(o_oc, &b[2], "outcomes", 2, K_I, (int)b[0].b.itemsize, 0, 0))
+    if (get(o_s, &b[0], "succ", 3, 'i', S_IDX, 0, 0) ||
+        get(o_first, &b[1], "first", 2, 'i', S_IDX, 0, 0) ||
+        get(o_oc, &b[2], "outcomes", 2, 'i', (int)b[0].b.itemsize, 0, 0))
         return call_end(&c, NULL);
     if (need(SHAPE(b[1], 0) == SHAPE(b[0], 0) && SHAPE(b[1], 1) == SHAPE(b[0], 1),
              "first: shape (n, A) of succ") ||
@@ -727,7 +574,7 @@ PyDoc_STRVAR(ps_expect_doc,
              "v[outcomes[k, l]] (summed in outcome order from 0.0) for start <= k < end. "
              "Releases the GIL.");
 
-static PyObject *ps_expect(PyObject *self, PyObject *args) {
+static PyObject *ps_expect(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_oc, *o_p, *o_v, *o_w;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOnn", &o_oc, &o_p, &o_v, &o_w, &start, &end))
@@ -735,9 +582,9 @@ static PyObject *ps_expect(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_oc, &b[0], "outcomes", 2, K_I, S_IDX, 0, 0) ||
-        get(o_p, &b[1], "probs", 1, K_F, 8, 0, 0) || get(o_v, &b[2], "v", 1, K_F, 8, 0, 0) ||
-        get(o_w, &b[3], "w", 1, K_F, 8, 1, 0))
+    if (get(o_oc, &b[0], "outcomes", 2, 'i', S_IDX, 0, 0) ||
+        get(o_p, &b[1], "probs", 1, 'f', 8, 0, 0) || get(o_v, &b[2], "v", 1, 'f', 8, 0, 0) ||
+        get(o_w, &b[3], "w", 1, 'f', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t npost = SHAPE(b[0], 0), L = SHAPE(b[0], 1);
     if (need(SHAPE(b[1], 0) == L, "probs: one probability per column of outcomes") ||
@@ -927,13 +774,13 @@ static PyObject *post_sweep(PyObject *args, int policy, int coded) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o[0], &b[0], "first", 2, K_I, S_IDX, 0, 0) ||
-        (coded ? get(o[1], &b[1], "codes", 2, K_U, 1 | 2 | 4, 0, 0) ||
-                     get(o[2], &b[2], "table", 1, K_F, 8, 0, 0)
-               : get(o[1], &b[1], "reward", 2, K_F, 8, 0, 0)) ||
-        get(o[3], &b[3], policy ? "act" : "arg", 1, K_INT, S_ANY, !policy, 0) ||
-        get(o[4], &b[4], "w", 1, K_F, 8, 0, 0) || get(o[5], &b[5], "v", 1, K_F, 8, 0, 0) ||
-        get(o[6], &b[6], "out", 1, K_F, 8, 1, 0))
+    if (get(o[0], &b[0], "first", 2, 'i', S_IDX, 0, 0) ||
+        (coded ? get(o[1], &b[1], "codes", 2, 'u', 1 | 2 | 4, 0, 0) ||
+                     get(o[2], &b[2], "table", 1, 'f', 8, 0, 0)
+               : get(o[1], &b[1], "reward", 2, 'f', 8, 0, 0)) ||
+        get(o[3], &b[3], policy ? "act" : "arg", 1, 'n', S_ANY, !policy, 0) ||
+        get(o[4], &b[4], "w", 1, 'f', 8, 0, 0) || get(o[5], &b[5], "v", 1, 'f', 8, 0, 0) ||
+        get(o[6], &b[6], "out", 1, 'f', 8, 1, 0))
         return call_end(&c, NULL);
     Post ps;
     ps.n = SHAPE(b[0], 0);
@@ -970,7 +817,9 @@ PyDoc_STRVAR(ps_max_stats_doc,
              "For states start <= x < end: out[x] = max_u reward[x, u] + discount "
              "w[first[x, u]] over the pairs with first >= 0, the first maximising action in arg "
              "(-1 if none); returns the min and max of out - v over the range. Releases the GIL.");
-static PyObject *ps_max_stats(PyObject *self, PyObject *args) { return post_sweep(args, 0, 0); }
+static PyObject *ps_max_stats(PyObject *Py_UNUSED(self), PyObject *args) {
+    return post_sweep(args, 0, 0);
+}
 
 PyDoc_STRVAR(ps_policy_stats_doc,
              "ps_policy_stats(first, reward, act, w, discount, v, out, start, end) -> (lo, hi)\n\n"
@@ -978,21 +827,21 @@ PyDoc_STRVAR(ps_policy_stats_doc,
              "a = act[x], -inf where act[x] = -1 (no action: ps_max_stats' arg where no action "
              "beats -inf); returns the min and max of out - v. IndexError for another action "
              "outside [0, A) or one not allowed (first = -1). Releases the GIL.");
-static PyObject *ps_policy_stats(PyObject *self, PyObject *args) {
+static PyObject *ps_policy_stats(PyObject *Py_UNUSED(self), PyObject *args) {
     return post_sweep(args, 1, 0);
 }
 
 PyDoc_STRVAR(ps_max_stats_coded_doc,
              "ps_max_stats_coded(first, codes, table, w, discount, v, out, arg, start, end) -> "
              "(lo, hi)\n\nps_max_stats with rewards table[codes[x, u]].");
-static PyObject *ps_max_stats_coded(PyObject *self, PyObject *args) {
+static PyObject *ps_max_stats_coded(PyObject *Py_UNUSED(self), PyObject *args) {
     return post_sweep(args, 0, 1);
 }
 
 PyDoc_STRVAR(ps_policy_stats_coded_doc,
              "ps_policy_stats_coded(first, codes, table, act, w, discount, v, out, start, end) "
              "-> (lo, hi)\n\nps_policy_stats with rewards table[codes[x, u]].");
-static PyObject *ps_policy_stats_coded(PyObject *self, PyObject *args) {
+static PyObject *ps_policy_stats_coded(PyObject *Py_UNUSED(self), PyObject *args) {
     return post_sweep(args, 1, 1);
 }
 
@@ -1038,7 +887,7 @@ PyDoc_STRVAR(ps_rows_doc,
              "the pair (x, act[x]) in BellmanRows.from_mdp), -1 where act[x] = -1 (no action). "
              "Releases the GIL.");
 
-static PyObject *ps_rows(PyObject *self, PyObject *args) {
+static PyObject *ps_rows(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_a, *o_rs, *o_act, *o_out;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOnn", &o_a, &o_rs, &o_act, &o_out, &start, &end))
@@ -1046,10 +895,10 @@ static PyObject *ps_rows(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_a, &b[0], "allowed", 2, K_B, 1, 0, 0) ||
-        get(o_rs, &b[1], "row_start", 1, K_I, 8, 0, 0) ||
-        get(o_act, &b[2], "act", 1, K_INT, S_ANY, 0, 0) ||
-        get(o_out, &b[3], "out", 1, K_I, 8, 1, 0))
+    if (get(o_a, &b[0], "allowed", 2, 'b', 1, 0, 0) ||
+        get(o_rs, &b[1], "row_start", 1, 'i', 8, 0, 0) ||
+        get(o_act, &b[2], "act", 1, 'n', S_ANY, 0, 0) ||
+        get(o_out, &b[3], "out", 1, 'i', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t n = SHAPE(b[0], 0);
     if (need(SHAPE(b[1], 0) == n && SHAPE(b[2], 0) == n && SHAPE(b[3], 0) == n,
@@ -1097,7 +946,7 @@ PyDoc_STRVAR(reward_codes_doc,
              "bit. Returns the number of distinct values, or -1 as soon as there are more than "
              "max_codes (codes is then partly written). One serial pass; releases the GIL.");
 
-static PyObject *reward_codes(PyObject *self, PyObject *args) {
+static PyObject *reward_codes(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_rew, *o_codes, *o_table;
     long long max_codes;
     if (!PyArg_ParseTuple(args, "OLOO", &o_rew, &max_codes, &o_codes, &o_table))
@@ -1105,9 +954,9 @@ static PyObject *reward_codes(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_rew, &b[0], "reward", 2, K_F, 8, 0, 0) ||
-        get(o_codes, &b[1], "codes", 2, K_U, 1 | 2 | 4, 1, 0) ||
-        get(o_table, &b[2], "table", 1, K_F, 8, 1, 0))
+    if (get(o_rew, &b[0], "reward", 2, 'f', 8, 0, 0) ||
+        get(o_codes, &b[1], "codes", 2, 'u', 1 | 2 | 4, 1, 0) ||
+        get(o_table, &b[2], "table", 1, 'f', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t n = SHAPE(b[0], 0) * SHAPE(b[0], 1);
     long long most = max_codes < n ? max_codes : (long long)n; /* codes the pass can make */
@@ -1239,7 +1088,7 @@ PyDoc_STRVAR(canonical_rows_doc,
              "out_oa[r] = out_owner[r] * n_actions + action[r] and out_key[r] a 64-bit hash of "
              "the canonical row. Releases the GIL.");
 
-static PyObject *canonical_rows(PyObject *self, PyObject *args) {
+static PyObject *canonical_rows(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o[10];
     long long n_actions;
     Py_ssize_t start, end;
@@ -1249,16 +1098,16 @@ static PyObject *canonical_rows(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o[0], &b[0], "labels", 1, K_I, S_IDX, 0, 0) ||
-        get(o[1], &b[1], "state", 1, K_I, S_IDX, 0, 0) ||
-        get(o[2], &b[2], "action", 1, K_INT, S_ANY, 0, 0) ||
-        get(o[3], &b[3], "succ", 2, K_I, S_IDX, 0, 0) ||
-        get(o[4], &b[4], "probs", 2, K_F, 8, 0, 1) ||
-        get(o[5], &b[5], "out_owner", 1, K_I, (int)b[0].b.itemsize, 1, 0) ||
-        get(o[6], &b[6], "out_t", 2, K_I, (int)b[0].b.itemsize, 1, 0) ||
-        get(o[7], &b[7], "out_p", 2, K_F, 8, 1, 0) ||
-        get(o[8], &b[8], "out_oa", 1, K_I, 8, 1, 0) ||
-        get(o[9], &b[9], "out_key", 1, K_U, 8, 1, 0))
+    if (get(o[0], &b[0], "labels", 1, 'i', S_IDX, 0, 0) ||
+        get(o[1], &b[1], "state", 1, 'i', S_IDX, 0, 0) ||
+        get(o[2], &b[2], "action", 1, 'n', S_ANY, 0, 0) ||
+        get(o[3], &b[3], "succ", 2, 'i', S_IDX, 0, 0) ||
+        get(o[4], &b[4], "probs", 2, 'f', 8, 0, 1) ||
+        get(o[5], &b[5], "out_owner", 1, 'i', (int)b[0].b.itemsize, 1, 0) ||
+        get(o[6], &b[6], "out_t", 2, 'i', (int)b[0].b.itemsize, 1, 0) ||
+        get(o[7], &b[7], "out_p", 2, 'f', 8, 1, 0) ||
+        get(o[8], &b[8], "out_oa", 1, 'i', 8, 1, 0) ||
+        get(o[9], &b[9], "out_key", 1, 'u', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t R = SHAPE(b[3], 0), L = SHAPE(b[3], 1);
     if (need(L >= 1, "succ: rows need at least one outcome") ||
@@ -1311,15 +1160,15 @@ PyDoc_STRVAR(bucket_order_doc,
              "(values in [0, len(offsets) - 1)): order (int64, one per row) lists the rows by "
              "bucket, offsets (int64) the buckets' starts. One serial pass; releases the GIL.");
 
-static PyObject *bucket_order(PyObject *self, PyObject *args) {
+static PyObject *bucket_order(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_oa, *o_order, *o_off;
     if (!PyArg_ParseTuple(args, "OOO", &o_oa, &o_order, &o_off))
         return NULL;
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_oa, &b[0], "oa", 1, K_I, 8, 0, 0) || get(o_order, &b[1], "order", 1, K_I, 8, 1, 0) ||
-        get(o_off, &b[2], "offsets", 1, K_I, 8, 1, 0))
+    if (get(o_oa, &b[0], "oa", 1, 'i', 8, 0, 0) || get(o_order, &b[1], "order", 1, 'i', 8, 1, 0) ||
+        get(o_off, &b[2], "offsets", 1, 'i', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t n = SHAPE(b[0], 0), nb = SHAPE(b[2], 0) - 1;
     if (need(SHAPE(b[1], 0) == n, "order: one entry per entry of oa") ||
@@ -1428,7 +1277,7 @@ PyDoc_STRVAR(sort_buckets_doc,
              "order[offsets[b]:offsets[b+1]] of start <= b < end by key[row], stably (rows "
              "with equal keys keep their order), in place. Releases the GIL.");
 
-static PyObject *sort_buckets(PyObject *self, PyObject *args) {
+static PyObject *sort_buckets(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_order, *o_off, *o_key;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOnn", &o_order, &o_off, &o_key, &start, &end))
@@ -1436,8 +1285,8 @@ static PyObject *sort_buckets(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_order, &b[0], "order", 1, K_I, 8, 1, 0) ||
-        get(o_off, &b[1], "offsets", 1, K_I, 8, 0, 0) || get(o_key, &b[2], "key", 1, K_U, 8, 0, 0))
+    if (get(o_order, &b[0], "order", 1, 'i', 8, 1, 0) ||
+        get(o_off, &b[1], "offsets", 1, 'i', 8, 0, 0) || get(o_key, &b[2], "key", 1, 'u', 8, 0, 0))
         return call_end(&c, NULL);
     Py_ssize_t nb = SHAPE(b[1], 0) - 1;
     if (need(nb >= 0, "offsets: empty (it has one entry more than the buckets)") ||
@@ -1493,7 +1342,7 @@ PyDoc_STRVAR(mark_groups_doc,
              "oa or key than row order[i-1], or other targets or probability bits). Returns True "
              "if two different rows share oa and key (a hash collision). Releases the GIL.");
 
-static PyObject *mark_groups(PyObject *self, PyObject *args) {
+static PyObject *mark_groups(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_order, *o_oa, *o_key, *o_t, *o_pb, *o_new;
     Py_ssize_t start, end;
     if (!PyArg_ParseTuple(args, "OOOOOOnn", &o_order, &o_oa, &o_key, &o_t, &o_pb, &o_new, &start,
@@ -1502,10 +1351,10 @@ static PyObject *mark_groups(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o_order, &b[0], "order", 1, K_I, 8, 0, 0) ||
-        get(o_oa, &b[1], "oa", 1, K_I, 8, 0, 0) || get(o_key, &b[2], "key", 1, K_U, 8, 0, 0) ||
-        get(o_t, &b[3], "t", 2, K_I, S_IDX, 0, 0) || get(o_pb, &b[4], "pbits", 2, K_I, 8, 0, 0) ||
-        get(o_new, &b[5], "new", 1, K_B, 1, 1, 0))
+    if (get(o_order, &b[0], "order", 1, 'i', 8, 0, 0) ||
+        get(o_oa, &b[1], "oa", 1, 'i', 8, 0, 0) || get(o_key, &b[2], "key", 1, 'u', 8, 0, 0) ||
+        get(o_t, &b[3], "t", 2, 'i', S_IDX, 0, 0) || get(o_pb, &b[4], "pbits", 2, 'i', 8, 0, 0) ||
+        get(o_new, &b[5], "new", 1, 'b', 1, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t n = SHAPE(b[0], 0), R = SHAPE(b[1], 0);
     if (need(SHAPE(b[2], 0) == R && SHAPE(b[3], 0) == R && SHAPE(b[4], 0) == R &&
@@ -1589,7 +1438,7 @@ PyDoc_STRVAR(merge_groups_doc,
              "and the group's representative, its first row: g_owner, g_action, g_t, g_p. "
              "Releases the GIL.");
 
-static PyObject *merge_groups(PyObject *self, PyObject *args) {
+static PyObject *merge_groups(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o[13];
     int use_max;
     Py_ssize_t start, end;
@@ -1599,17 +1448,17 @@ static PyObject *merge_groups(PyObject *self, PyObject *args) {
     Call c;
     call_init(&c);
     Buf *b = c.b;
-    if (get(o[0], &b[0], "order", 1, K_I, 8, 0, 0) ||
-        get(o[1], &b[1], "starts", 1, K_I, 8, 0, 0) ||
-        get(o[2], &b[2], "reward", 1, K_F, 8, 0, 0) ||
-        get(o[3], &b[3], "owner", 1, K_INT, S_ANY, 0, 0) ||
-        get(o[4], &b[4], "action", 1, K_INT, S_ANY, 0, 0) ||
-        get(o[5], &b[5], "t", 2, K_INT, S_ANY, 0, 0) || get(o[6], &b[6], "p", 2, K_F, 8, 0, 0) ||
-        get(o[7], &b[7], "group", 1, K_I, 8, 1, 0) || get(o[8], &b[8], "red", 1, K_F, 8, 1, 0) ||
+    if (get(o[0], &b[0], "order", 1, 'i', 8, 0, 0) ||
+        get(o[1], &b[1], "starts", 1, 'i', 8, 0, 0) ||
+        get(o[2], &b[2], "reward", 1, 'f', 8, 0, 0) ||
+        get(o[3], &b[3], "owner", 1, 'n', S_ANY, 0, 0) ||
+        get(o[4], &b[4], "action", 1, 'n', S_ANY, 0, 0) ||
+        get(o[5], &b[5], "t", 2, 'n', S_ANY, 0, 0) || get(o[6], &b[6], "p", 2, 'f', 8, 0, 0) ||
+        get(o[7], &b[7], "group", 1, 'i', 8, 1, 0) || get(o[8], &b[8], "red", 1, 'f', 8, 1, 0) ||
         get(o[9], &b[9], "g_owner", 1, b[3].kind, (int)b[3].b.itemsize, 1, 0) ||
         get(o[10], &b[10], "g_action", 1, b[4].kind, (int)b[4].b.itemsize, 1, 0) ||
         get(o[11], &b[11], "g_t", 2, b[5].kind, (int)b[5].b.itemsize, 1, 0) ||
-        get(o[12], &b[12], "g_p", 2, K_F, 8, 1, 0))
+        get(o[12], &b[12], "g_p", 2, 'f', 8, 1, 0))
         return call_end(&c, NULL);
     Py_ssize_t R = SHAPE(b[2], 0), G = SHAPE(b[1], 0) - 1, L = SHAPE(b[5], 1);
     if (need(G >= 0, "starts: empty (it has one entry more than the groups)") ||
