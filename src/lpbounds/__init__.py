@@ -10,8 +10,8 @@ Data flows one way: model (:class:`FiniteMDP`, :class:`Partition`) -> Bellman ro
 (:class:`BellmanRows`) -> cvxpy problem -> result -> checks and reports.
 
 ``import lpbounds`` is cheap: the public names below are imported on first use
-(PEP 562), so neither numpy-heavy modules nor cvxpy, matplotlib, pandas or numba load
-until a function needs them.
+(PEP 562), so neither numpy-heavy modules nor cvxpy, matplotlib or pandas load until a
+function needs them.
 """
 
 from __future__ import annotations

@@ -16,8 +16,8 @@ minima and maxima, any-of flags), so the split changes no number. ``bucket_order
 
 Every function has the name, arguments and outputs of its numpy twin in
 :mod:`lpbounds._kernels.twins` and the same arithmetic (``tests/test_ckernels.py`` compares
-them bit for bit); they replaced numba kernels that computed the same numbers, so a
-process needs no JIT compiler and pays no first-call compile. Indices read from the
+them bit for bit); they replaced numba kernels that computed the same numbers, and need no
+JIT compiler: a first call costs what any call does. Indices read from the
 arrays are checked in C: an index outside its array raises IndexError naming the argument
 and the entry (never a read outside the buffers).
 """
@@ -28,15 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from .extensions import rowkernels as _c
 from .threads import run_ranges, split_ranges
-
-try:
-    from . import rowkernels as _c
-except ImportError as exc:  # pragma: no cover - a source tree without the build
-    raise ImportError(
-        "lpbounds' compiled row kernels (lpbounds._kernels.rowkernels) are not built: "
-        "install lpbounds with pip (`pip install -e .` in a checkout), which compiles them"
-    ) from exc
 
 __all__ = [
     "PARALLEL_READS",

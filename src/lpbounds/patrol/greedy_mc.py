@@ -72,7 +72,7 @@ import numpy as np
 from scipy import stats
 
 from .._defaults import DEFAULT_SEEDS
-from .._kernels import patrolmc as _c
+from .._kernels.extensions import patrolmc as _c
 from .._kernels.threads import run_ranges, split_ranges
 from ..dp import solve_exact
 from ..errors import ConsistencyError, ValidationError

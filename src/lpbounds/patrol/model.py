@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import patrolsweeps as _c
+from .._kernels.extensions import patrolsweeps as _c
 from .._kernels.threads import run_ranges, split_ranges
 from ..errors import ValidationError
 from ..model.mdp import FiniteMDP

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import patrolsweeps as _c
+from .._kernels.extensions import patrolsweeps as _c
 from ..errors import ValidationError
 from .params import PatrolParams
 

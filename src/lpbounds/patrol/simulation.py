@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import patrolmc as _c
+from .._kernels.extensions import patrolmc as _c
 from ..errors import ValidationError
 
 __all__ = [

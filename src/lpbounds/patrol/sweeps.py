@@ -59,7 +59,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import patrolsweeps as _c
+from .._kernels.extensions import patrolsweeps as _c
 from .._kernels.threads import run_ranges, split_ranges
 from .params import PatrolParams
 from .partitions import block_sizes
@@ -218,7 +218,7 @@ def _chunks(func: Callable[..., Any], args: tuple[Any, ...], nchunks: int) -> li
 
 def _extremes(parts: list[tuple[float, float]]) -> tuple[float, float]:
     """The ranges' (min, max) combined in chunk order: the first of the extremes, as the
-    per-chunk fold in C (and numba's ``min``, ``max`` before it)."""
+    per-chunk fold in C (as numba's ``min``, ``max`` were before it)."""
     return min(p[0] for p in parts), max(p[1] for p in parts)
 
 

@@ -71,8 +71,8 @@ iterative policy evaluation) run on any :class:`SweepOperator`: :class:`BellmanR
 :class:`PostDecisionRows` and the matrix-free patrol operator
 (:class:`lpbounds.patrol.matrix_free.MatrixFreePatrol`) implement it. A sweep writes
 ``T v`` (or ``T_pi v``) into ``out`` and returns the extremes of ``out - v``; the work
-chunks of the patrol's numba kernels are the operator's choice unless ``nchunks`` is given
-(the C sweeps of :class:`BellmanRows` and :class:`PostDecisionRows` take one range per
+chunks of the patrol's matrix-free kernels are the operator's choice unless ``nchunks`` is
+given (the C sweeps of :class:`BellmanRows` and :class:`PostDecisionRows` take one range per
 thread and ignore it; neither changes a number: every state's value is computed alone and
 the extremes are exact),
 and ``work`` is the operator's scratch array from :meth:`SweepOperator.new_work`, made once
@@ -125,9 +125,9 @@ class SweepOperator(Protocol):
     discount : float
         ``lambda``.
     compiled : bool
-        True when the sweeps run compiled, multithreaded kernels (C; the patrol's matrix-free
-        sweeps numba's), whose thread count :func:`lpbounds.dp.threads_for` sets; False for
-        an operator whose sweeps have no threads.
+        True when the sweeps run compiled, multithreaded kernels (C), whose thread count
+        :func:`lpbounds.dp.threads_for` sets; False for an operator whose sweeps have no
+        threads.
     sweep_reads : int
         Values one sweep reads: sweeps below :data:`lpbounds.dp.SERIAL_SWEEP_READS` run
         on one thread (:func:`lpbounds.dp.threads_for`).

@@ -1033,7 +1033,7 @@ def _execute(
         batches = ((run_task(t), []) for t in tasks)  # this process: logged as it happens
     else:
         n = min(int(jobs or os.cpu_count() or 1), len(tasks))
-        # spawn, not fork: forking a process that has run OpenMP code (numba, HiGHS)
+        # spawn, not fork: forking a process that has run OpenMP code (HiGHS)
         # aborts the child ("fork() called from a process already using GNU OpenMP")
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
