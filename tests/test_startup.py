@@ -1,6 +1,7 @@
-"""Start-up: ``import lpbounds`` and ``lpbounds [SUBCOMMAND] --help`` load none of the heavy
-dependencies, the lazy public names behave like eager ones, and no solve, small or large,
-needs a JIT compiler: the kernels are C, built at install (so nothing waits for numba).
+"""Start-up: ``import lpbounds``, ``lpbounds [SUBCOMMAND] --help`` and the commands whose
+work needs no LP (``solve`` by exact DP, ``models``) load none of the heavy dependencies,
+the lazy public names behave like eager ones, and no solve, small or large, needs a JIT
+compiler: the kernels are C, built at install (numba is no dependency).
 
 Each check runs in a fresh interpreter: what a module imports is only visible there.
 Timings are measured by ``benchmarks/bench_startup.py``, never asserted here.
@@ -13,13 +14,23 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 import lpbounds
 from lpbounds.cli.main import COMMANDS
 
-HEAVY = ("cvxpy", "matplotlib", "pandas", "numba")
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Packages a command loads only when its work needs them: the LP stack (cvxpy and the
+#: scipy.stats it imports, the solvers), the figures, the tables of studies, the optional
+#: Gymnasium and Dask, and numba (no dependency any more, but still installed beside
+#: lpbounds by QuantEcon: it must not come back through an import).
+HEAVY = (
+    "cvxpy", "matplotlib", "pandas", "gymnasium", "numba", "dask", "scipy.stats", "highspy",
+    "clarabel",
+)  # fmt: skip
 #: The heavy dependencies, the patrol package and the DP core, none needed to print help.
 NOT_FOR_HELP = (*HEAVY, "lpbounds.patrol", "lpbounds.dp", "lpbounds.studies.compare", "numpy")
 
@@ -42,18 +53,43 @@ def test_import_lpbounds_loads_no_heavy_dependency():
 
 
 def test_the_probe_sees_a_heavy_import():
-    # the check above can fail: the same probe reports cvxpy once the formulations load
-    assert imported_by("import lpbounds.formulations") == ["cvxpy"]
+    # the checks here can fail: the same probe reports cvxpy (and the scipy.stats it
+    # imports) once a formulation loads, and nothing for the formulations' table of contents
+    assert imported_by("import lpbounds.formulations") == []
+    assert "cvxpy" in imported_by("from lpbounds.formulations import RLP")
+    assert "scipy.stats" in imported_by("from lpbounds.formulations import RLP")
+
+
+def _command(argv: list[str]) -> str:
+    """Code that runs ``lpbounds ARGV`` in this process (help's SystemExit is its end)."""
+    return (
+        f"import sys\nsys.argv = {['lpbounds', *argv]!r}\nfrom lpbounds.cli.main import main\n"
+        "try:\n    code = main()\nexcept SystemExit as exc:\n    code = exc.code\n"
+        "assert code == 0, code\n"
+    )
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["solve", "forest"],  # a shelf model, exact DP
+        ["solve", "models/garnet-small.toml"],  # an instance file, exact DP
+        ["models"],  # the listing: sizes from parameters, Gymnasium only looked for
+    ],
+    ids=lambda a: " ".join(a),
+)
+def test_a_command_loads_only_what_its_work_needs(argv, monkeypatch):
+    """Exact DP needs no LP stack, no figures, no tables of studies; the model listing
+    needs none of them either, nor Gymnasium (``importlib.util.find_spec`` tells whether
+    it is installed)."""
+    monkeypatch.chdir(ROOT)
+    assert imported_by(_command(argv)) == []
 
 
 @pytest.mark.parametrize("command", ["", *COMMANDS])
 def test_help_loads_no_heavy_dependency(command):
-    argv = ["lpbounds", *([command] if command else []), "--help"]
-    code = (
-        f"import sys\nsys.argv = {argv!r}\nfrom lpbounds.cli.main import main\n"
-        "try:\n    main()\nexcept SystemExit as exc:\n    assert exc.code == 0, exc.code\n"
-    )
-    assert imported_by(code, NOT_FOR_HELP) == []
+    argv = [*([command] if command else []), "--help"]
+    assert imported_by(_command(argv), NOT_FOR_HELP) == []
 
 
 def test_a_small_first_solve_needs_no_jit():
