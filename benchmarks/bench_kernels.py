@@ -18,7 +18,9 @@ Measures, in one run (writes the ``kernels`` section of docs/benchmarks.md):
 
 ``--old-src`` is the ``src`` directory of a tree at the last commit with numba's row kernels
 (for instance ``git archive 1571e7d | tar -x -C /tmp/old`` with its ``rowsweeps`` extension
-built); without it only part 2 runs.
+built); without it only part 2 runs. Parts 1 and 3 run the older tree's numba kernels, so they
+need numba in this environment (``pip install numba``), which lpbounds no longer installs:
+this script imports it only through the older tree's modules.
 
     python benchmarks/bench_kernels.py --old-src /tmp/old/src [--repeat 5] [--no-write]
 """
@@ -246,18 +248,18 @@ def compare(group: str, c_calls: dict, o_calls: dict, reps: int, rows: list) -> 
 
 
 def compare_threads(group: str, calls: tuple[dict, dict], reps: int, rows: list) -> None:
-    """:func:`compare` on all threads and on one, numba's and the C pool's alike."""
-    import numba
-
+    """:func:`compare` on all threads and on one, numba's and the C pool's alike (numba as
+    the older tree's kernels loaded it: this tree does not use it)."""
+    set_numba_threads = sys.modules["numba"].set_num_threads
     many = threads.get_threads()
     try:
         for k in sorted({many, 1}, reverse=True):
             threads.set_threads(k)
-            numba.set_num_threads(k)
+            set_numba_threads(k)
             compare(group, *calls, reps, rows)
     finally:
         threads.set_threads(many)
-        numba.set_num_threads(many)
+        set_numba_threads(many)
 
 
 # ---------------------------------------------------------------------- cold processes

@@ -15,6 +15,9 @@ fork point of the port), every measurement in a fresh process, the two trees alt
   process with an empty numba cache (``NUMBA_CACHE_DIR`` a new folder: what a fresh
   environment has), then the second with that cache.
 
+The older tree's processes import numba, so this environment needs it (``pip install
+numba``; lpbounds no longer installs it); this tree's never do.
+
 Each pair of runs must give the same V* and policy and the same Monte Carlo estimates (the
 script compares SHA-256 prefixes and stops otherwise). Writes the ``patrol-c`` section of
 docs/benchmarks.md.

@@ -132,7 +132,7 @@ def greedy(name: str, params: Any, lower: np.ndarray, upper: np.ndarray, model: 
     returns = np.empty(PATHS)
     kernel = gm._Kernel.of(params)
     run = getattr(gm, "_returns_kernel", None)
-    if run is not None:  # numba
+    if run is not None:  # an older tree's numba kernel (the port's "before")
         run(3, y, lower, kernel.args(), True, returns)
     else:  # C
         gm._returns(3, y, lower, kernel, True, returns)
