@@ -44,11 +44,11 @@ from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol.params import PatrolParams
 p = params_from_instance(load_instance("patrol-paper"))
-warm = PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=11)  # above SMALL_READS: compiles
+warm = PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=11)  # loads every kernel once
 if "{path}" == "array":
     from lpbounds import solve_exact
     from lpbounds.patrol.model import PatrolModel
-    solve_exact(PatrolModel(warm).mdp())  # numba's cache loaded (or compiled), not timed
+    solve_exact(PatrolModel(warm).mdp())  # first calls made, not timed
     t = time.perf_counter()
     model = PatrolModel(p).mdp()
     build = time.perf_counter() - t
@@ -56,7 +56,7 @@ if "{path}" == "array":
     policy = np.asarray(r.policy, dtype=np.int8)
 else:
     from lpbounds.patrol.matrix_free import MatrixFreePatrol, solve_vstar
-    solve_vstar(MatrixFreePatrol(warm))  # numba's cache loaded (or compiled), not timed
+    solve_vstar(MatrixFreePatrol(warm))  # the C sweeps' first run, not timed
     t = time.perf_counter()
     model = MatrixFreePatrol(p)
     build = time.perf_counter() - t
@@ -86,20 +86,20 @@ log(f"done: peak rss {r.peak_rss_mb:.0f} MB, seconds {r.seconds}")
 
 
 SWEEPS = r"""
-import json, os, time, numpy as np, numba
-from numba import njit, prange
+import json, os, time, numpy as np
+from lpbounds._kernels import threads
 from lpbounds.model.instances import load_instance
 from lpbounds.patrol.instance import params_from_instance
 from lpbounds.patrol.matrix_free import MatrixFreePatrol
 
 __PROBE__
 
-many = numba.get_num_threads()
+many = threads.get_threads()
 a = np.random.default_rng(0).random(64 * 2**20)  # 512 MB, far above the caches
 b = np.empty_like(a)
-read_sum(a); copy(a, b)
-bw = {"read": a.nbytes / best(lambda: read_sum(a), 7)[0] / 1e9,
-      "copy": 2 * a.nbytes / best(lambda: copy(a, b), 7)[0] / 1e9}
+read_sum(a, many); copy(a, b, many)
+bw = {"read": a.nbytes / best(lambda: read_sum(a, many), 7)[0] / 1e9,
+      "copy": 2 * a.nbytes / best(lambda: copy(a, b, many), 7)[0] / 1e9}
 del a, b
 out = {"bw": bw, "many": many, "load": [os.getloadavg()[0]], "sizes": {}}
 for name in __NAMES__:
@@ -121,11 +121,11 @@ for name in __NAMES__:
         act = arg.copy()
         r = {}
         for k in sorted({1, many}):
-            numba.set_num_threads(k)
+            threads.set_threads(k)  # every kernel (C): the array path's and the matrix-free
             op.sweep_max(v, u, arg, work=work)
             r[f"max/{k}"] = best(lambda: op.sweep_max(v, u, arg, work=work), 15)
             r[f"policy/{k}"] = best(lambda: op.sweep_policy(act, v, u, work=work), 15)
-        numba.set_num_threads(many)
+        threads.set_threads(many)
         res[path] = r
     out["sizes"][name] = res
     out["load"].append(os.getloadavg()[0])
@@ -217,7 +217,7 @@ seconds, the array path including building its MDP):
 {ratios}
 
 Single sweeps (best of 15 and median, after 4 value-iteration steps from 0; on 1 thread and
-on {r["many"]}). Bandwidth (numba loops over 512 MB): read {r["bw"]["read"]:.1f} GB/s,
+on {r["many"]}). Bandwidth (numpy, 512 MB, a slice a thread): read {r["bw"]["read"]:.1f} GB/s,
 copy {r["bw"]["copy"]:.1f} GB/s. The floor is the compulsory bytes per state (matrix-free:
 `v` read and `out` written once, 8 + 8 bytes, and the int8 choice; the array path: 68
 bytes, its own arrays besides, as in the dp-floor section) over the best bandwidth:
@@ -455,7 +455,7 @@ Machine: {machine()}; {today()}; load average (1, 5, 15 min) during the runs: {"
 
 The paper's instance, `solve_exact` (array path: successor arrays and the post-decision
 form) against `lpbounds.patrol.matrix_free.solve_vstar` (nothing stored per state), each
-in a fresh process after an untimed solve of a small instance (numba's cache loaded),
+in a fresh process after an untimed solve of a small instance (the first calls made),
 {args.repeat} alternating runs (median seconds, including building the MDP for the array path):
 
 | path | seconds | iterations | sweeps | residual | peak MB |

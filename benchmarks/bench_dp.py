@@ -7,8 +7,8 @@ writes the `foundation` section of docs/benchmarks.md.
     python benchmarks/bench_dp.py [--repeat 3] [--n 2048000]
 
 ``--floor`` instead measures the patrol MDP's sweeps against the memory-bandwidth floor:
-this machine's read and copy bandwidth (numba, 1 and all threads, arrays far
-larger than the caches), the compulsory bytes of an improvement and an evaluation sweep
+this machine's read and copy bandwidth (numpy, one slice per thread, 1 and all threads,
+arrays far larger than the caches), the compulsory bytes of an improvement and an evaluation sweep
 (every array the sweep touches, read or written once), and the sweeps' own times on one
 thread, all threads and the timed choice of ``lpbounds.dp``; writes ``dp-floor``.
 """
@@ -45,26 +45,24 @@ print(json.dumps({{"seconds": t, "iterations": r.iterations, "sweeps": r.sweeps,
 
 
 FLOOR = r"""
-import json, time, os, numpy as np, numba
-from numba import njit, prange
+import json, time, os, numpy as np
 import lpbounds as lb
+from lpbounds._kernels import threads
 from lpbounds.dp import post_decision_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
 
 __PROBE__
 
-many = numba.get_num_threads()
+many = threads.get_threads()
 a = np.random.default_rng(0).random(64 * 2**20 // 8 * 8)  # 512 MB
 b = np.empty_like(a)
 bw = {}
 for k in (1, many):
-    numba.set_num_threads(k)
-    read_sum(a); copy(a, b)
-    tr, _ = best(lambda: read_sum(a), 7)
-    tc, _ = best(lambda: copy(a, b), 7)
+    read_sum(a, k); copy(a, b, k)
+    tr, _ = best(lambda: read_sum(a, k), 7)
+    tc, _ = best(lambda: copy(a, b, k), 7)
     bw[k] = {"read": a.nbytes / tr / 1e9, "copy": 2 * a.nbytes / tc / 1e9}
 del a, b
-numba.set_num_threads(many)
 mdp = PatrolModel(PatrolParams()).mdp()
 ps = post_decision_rows(mdp)
 r = lb.solve_exact(mdp)
@@ -79,12 +77,12 @@ imp = (ps.outcomes.nbytes + w.nbytes  # ps_expect: outcomes read, W written
 pol = imp - arg.nbytes - (2 * ps.first.nbytes + 2 * codes.nbytes) // 3 + act.nbytes
 times = {}
 for k in sorted({1, many}):
-    numba.set_num_threads(k)
+    threads.set_threads(k)
     times[f"max/{k}"] = best(lambda: ps.sweep_max(v, out, arg, work=w), 15)
     times[f"policy/{k}"] = best(lambda: ps.sweep_policy(act, v, out, work=w), 15)
     t = time.perf_counter(); ps.kernels().ps_expect(ps.outcomes, ps.probs, v, w)
     times[f"expect/{k}"] = best(lambda: ps.kernels().ps_expect(ps.outcomes, ps.probs, v, w), 15)
-numba.set_num_threads(many)
+threads.set_threads(many)
 solves = {}
 for name, fix in (("choice", None), ("one", 1), ("all", many)):
     import lpbounds.dp as dpm
@@ -136,7 +134,8 @@ def floor() -> None:
 Machine: {machine()}. Date: {today()}. Load average at start {load0[0]:.2f}, at end
 {r["load"][0]:.2f} (2 cores; above 2 other jobs shared them).
 
-Bandwidth (numba loops over 512 MB arrays, best of 7): {bws}. The floor of a sweep is
+Bandwidth (numpy sums and copies of 512 MB arrays, a slice per thread, best of 7): {bws}.
+The floor of a sweep is
 its compulsory bytes (every array it touches read or written once: outcomes, W twice, v
 twice, first, reward codes, out, the actions) over the best bandwidth measured
 ({bw:.1f} GB/s; the last column uses the best read-only bandwidth, {bw_read:.1f} GB/s, as

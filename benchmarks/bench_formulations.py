@@ -44,7 +44,7 @@ def bench_aggregate() -> list[str]:
     t_build = time.perf_counter() - t0
     BellmanRows.aggregate(
         garnet(50, 3, 5, 0.9, seed=1, shared_probabilities=True), random_partition(50, 5, 1)
-    )  # JIT warm-up
+    )  # warm-up (page faults, the pool)
     times = []
     for _ in range(3):
         t0 = time.perf_counter()
@@ -84,9 +84,7 @@ def bench_aggregate() -> list[str]:
 def _aggregate_steps(mdp, part) -> str:
     """Time the stages of ``BellmanRows.aggregate`` (its private kernels; best effort)."""
     try:
-        import numba
-
-        from lpbounds._kernels import aggregate as _aggregate
+        from lpbounds._kernels import ckernels as _aggregate
         from lpbounds.model.mdp import index_dtype
 
         out = []
@@ -98,11 +96,11 @@ def _aggregate_steps(mdp, part) -> str:
         idt = index_dtype(m)
         owner, oa = np.empty(n_rows, idt), np.empty(n_rows, np.int64)
         targets, probs = np.empty((n_rows, n_out), idt), np.empty((n_rows, n_out))
-        key, nch = np.empty(n_rows, np.uint64), 8 * numba.get_num_threads()
+        key = np.empty(n_rows, np.uint64)
         t0 = clock()
         _aggregate.canonical_rows(
             part.labels.astype(idt), exact.owner, exact.action, exact.targets, exact.probs,
-            mdp.n_actions, owner, targets, probs, oa, key, nch,
+            mdp.n_actions, owner, targets, probs, oa, key,
         )  # fmt: skip
         out.append(("labels + canonical form + hash", clock() - t0))
         t0 = clock()
@@ -111,7 +109,7 @@ def _aggregate_steps(mdp, part) -> str:
         out.append(("counting sort + bucket sorts", clock() - t0))
         t0 = clock()
         new = np.empty(n_rows, bool)
-        _aggregate.mark_groups(order, oa, key, targets, probs.view(np.int64), new, nch)
+        _aggregate.mark_groups(order, oa, key, targets, probs.view(np.int64), new)
         out.append(("group marks", clock() - t0))
         return "; ".join(f"{k} {v:.2f} s" for k, v in out) + " (then the merge kernel)"
     except Exception as exc:  # the kernels are private to rows/__init__.py and may change

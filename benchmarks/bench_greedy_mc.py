@@ -169,8 +169,8 @@ def main() -> None:
             "(benchmarks/bench_greedy_mc.py)",
             f"{meta['machine']}; {meta['date']}; load average {load0[0]:.1f} before, "
             f"{load1[0]:.1f} after; total {time.time() - t0:.0f} s. Each model in a fresh "
-            "process; compiled kernels (numba, prange over paths), first compile excluded "
-            "(done on a small model first).",
+            "process; compiled kernels (C, one range of paths per thread), their first run "
+            "excluded (done on a small model first).",
             _fmt_table(runs),
             f"Control variate at 8 stations, side by side (8 empty-station starts x "
             f"{args.cv_paths:,} paths, {cv['steps']:,} steps each way, alternating, median of "

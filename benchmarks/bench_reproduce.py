@@ -82,8 +82,8 @@ def main() -> None:
         "",
         f"Instance `{args.model}`: |S| = {r0['n_states']:,}, M = {r0['n_partitions']:,}; "
         f"Theorems 3-4 check `--general {args.general}`; Monte Carlo {len(args.seeds)} seeds "
-        f"x {args.steps:,} steps; {args.repeat} run(s) in fresh processes (numba's on-disk "
-        "cache warm), medians.",
+        f"x {args.steps:,} steps; {args.repeat} run(s) in fresh processes (the kernels are C, "
+        "built at install: nothing compiles), medians.",
         "",
         f"- total: **{wall:.1f} s** (target <= {TARGET_SECONDS:.0f} s: "
         f"{'met' if wall <= TARGET_SECONDS else 'NOT met'}); peak resident memory "

@@ -103,7 +103,7 @@ def test_the_policy_is_the_greedy_one(solved):
 
 def _check_environment(meta: dict) -> None:
     assert meta["lpbounds"] == lb.__version__
-    for name in ("numpy", "scipy", "cvxpy", "highspy", "clarabel", "numba"):
+    for name in ("numpy", "scipy", "cvxpy", "highspy", "clarabel"):
         assert meta["dependencies"][name] == version(name)
     assert meta["solvers"]["highspy"] == version("highspy")
     assert meta["machine"]["cpus"] == os.cpu_count()

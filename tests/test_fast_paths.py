@@ -6,9 +6,10 @@ FiniteMDP that has it. Passing ``exact_rows(mdp)`` forces the plain row kernels.
 path claims the *same arithmetic*, so the tests below ask for bit-identical results, and
 compare both with plain-numpy references from ``conftest``.
 
-Every test runs twice, on the numpy twins of the kernels (what small models use) and on
-the compiled kernels (what large ones use; :mod:`lpbounds._kernels.dispatch`), and the tests at the
-end compare the two paths with each other, bit for bit. Identical numbers could still be
+Every test runs twice, with the library on the numpy twins of the kernels (the reference
+arithmetic) and on the C kernels (what it runs; :mod:`lpbounds._kernels.dispatch`, the work
+split over the threads even on these small models), and the tests at the end compare the
+two paths with each other, bit for bit. Identical numbers could still be
 identically wrong, so each result's certificate is also held to its promise both ways
 against ``tests/_independent`` (numpy only): the true error within ``error_bound``, and
 ``error_bound`` no larger than the residual recomputed there implies.
@@ -24,9 +25,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lpbounds as lb
-from lpbounds._kernels import compiled as _kernels
+from lpbounds._kernels import ckernels as _kernels
 from lpbounds._kernels import dispatch as _backend
-from lpbounds._kernels import native
+from lpbounds._kernels import native, threads
 from lpbounds._kernels import twins as _npkernels
 from lpbounds.dp import exact_rows, post_decision_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
@@ -35,14 +36,21 @@ from lpbounds.rows import PostDecisionRows
 from . import _independent as ind
 from .conftest import reference_bellman, reference_solve
 
-NUMPY = 10**18  # SMALL_READS that sends every model to the numpy twins
-COMPILED = 0  # ... and to the compiled kernels
+
+def use_path(monkeypatch, path: str) -> None:
+    """Send every kernel call of the library to one path: ``"numpy"``, the twins; ``"compiled"``,
+    the C kernels with every call's work split over the threads (however small)."""
+    if path == "numpy":
+        monkeypatch.setattr(_backend, "kernels", lambda: _npkernels)
+        monkeypatch.setattr(_backend, "row_sweeps", lambda: _npkernels)
+    else:
+        monkeypatch.setattr(_kernels, "PARALLEL_READS", 0)
 
 
 @pytest.fixture(params=["numpy", "compiled"])
 def kernel_path(request, monkeypatch):
     """Run a test on both kernel paths."""
-    monkeypatch.setattr(_backend, "SMALL_READS", NUMPY if request.param == "numpy" else COMPILED)
+    use_path(monkeypatch, request.param)
     return request.param
 
 
@@ -145,7 +153,7 @@ def test_random_post_decision_mdp_equals_plain(seed, allowed_fraction):
     v = np.random.default_rng(seed).normal(size=mdp.n_states)
     out = np.empty_like(v)
     act = ps.new_arg()
-    lo, hi = ps.sweep_max(v, out, act, nchunks=7)
+    lo, hi = ps.sweep_max(v, out, act, nchunks=7)  # nchunks: ignored by the C sweeps
     q = reference_bellman(mdp, v)
     np.testing.assert_allclose(out, q.max(axis=1), rtol=0, atol=1e-14, err_msg="T v")
     assert np.array_equal(act, q.argmax(axis=1)), "first maximising action"
@@ -277,10 +285,10 @@ def test_property_fast_equals_plain(n, a, ll, lam, frac, seed):
         check_dp(fast, mdp, method)
 
 
-# ---------------------------------------------------------------------- numpy twins vs compiled
+# ---------------------------------------------------------------------- numpy twins vs C
 def on_path(monkeypatch, path: str, func):
     """``func()`` with every operation sent to one kernel path."""
-    monkeypatch.setattr(_backend, "SMALL_READS", NUMPY if path == "numpy" else COMPILED)
+    use_path(monkeypatch, path)
     try:
         return func()
     finally:
@@ -440,7 +448,7 @@ def test_numpy_twins_of_the_helper_kernels_equal_compiled():
         for kern in (_npkernels, _kernels):
             codes = np.empty(reward.shape, dtype=np.uint16)
             table = np.empty(max_codes)
-            count = kern.reward_codes(reward, reward.view(np.int64), max_codes, codes, table)
+            count = kern.reward_codes(reward, max_codes, codes, table)
             got.append(count)
             if count > 0:
                 assert np.array_equal(table[codes], reward)
@@ -476,73 +484,64 @@ def test_property_numpy_equals_compiled(monkeypatch, n, a, ll, m, lam, shared, s
     assert np.array_equal(bits(ta[0]), bits(tb[0])) and np.array_equal(ta[1], tb[1])
 
 
-def test_compile_is_announced_once_per_group(monkeypatch, caplog):
-    monkeypatch.setattr(_backend, "SMALL_READS", COMPILED)
-    monkeypatch.setattr(_backend, "_announced", set())
-    monkeypatch.setattr(_backend, "_needs_compile", lambda module, names: True)
+def test_no_kernel_compiles_or_announces_a_compile(monkeypatch, caplog):
+    """The kernels are C, built at install: no call, small or split over the threads, compiles
+    anything or says so (numba's kernels announced their first compile once per group)."""
+    use_path(monkeypatch, "compiled")
     with caplog.at_level("WARNING", logger="lpbounds"):
         mdp = lb.garnet(30, 2, 3, 0.9, seed=1)
         for _ in range(3):
-            lb.solve_exact(exact_rows(fresh(mdp)))  # the native (C) sweeps: nothing to compile
-        assert not caplog.records
-        for _ in range(3):
-            lb.BellmanRows.from_mdp(mdp).q_values(np.zeros(30))  # numba's row kernels
-    notes = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
-    assert len(notes) == 1, notes  # once, not once per call
-    assert "compiling lpbounds' Bellman-row kernels" in notes[0]
-    assert "about 3-6 s" in notes[0] and "cache" in notes[0]
-    caplog.clear()
-    monkeypatch.setattr(_backend, "SMALL_READS", NUMPY)
-    monkeypatch.setattr(_backend, "_announced", set())
-    with caplog.at_level("WARNING", logger="lpbounds"):
+            lb.solve_exact(exact_rows(fresh(mdp)))  # the row sweeps
+            lb.BellmanRows.from_mdp(mdp).q_values(np.zeros(30))  # the row kernels
+            agg = lb.BellmanRows.aggregate(mdp, lb.random_partition(30, 4, seed=1), "min")
+            agg.apply_maxmin(np.zeros(4))  # the aggregation kernels and the game operator
+            lb.solve_exact(post_decision_mdp(40, 2, 3, 0.9, seed=2))  # the post-decision form
         lb.solve_exact(lb.garnet(30, 2, 3, 0.9, seed=1))
-    assert not caplog.records, "a small model compiles nothing and says nothing"
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
 
 
 # ---------------------------------------------------------------------- thread choice
-def _numba_threads():
-    import numba  # a dependency of lpbounds (its compiled kernels): never skipped
-
-    if numba.config.NUMBA_NUM_THREADS < 2:
-        pytest.skip("numba has one thread here")
-    return numba
+def _two_threads():
+    """The kernels' thread count (:mod:`lpbounds._kernels.threads`), when there are two CPUs."""
+    if threads.default_threads() < 2:
+        pytest.skip("one CPU here")
+    return threads
 
 
 @pytest.mark.parametrize("form", ["post-decision", "rows"])
 @pytest.mark.parametrize("method", ["mpi", "vi"])
 def test_thread_choice_changes_no_number(monkeypatch, form, method):
     """Calibrated threads (re-timed every sweep), one thread and two give identical results."""
-    numba = _numba_threads()
+    pool = _two_threads()
     from lpbounds import dp
 
-    monkeypatch.setattr(_backend, "SMALL_READS", COMPILED)
+    use_path(monkeypatch, "compiled")  # every sweep split over the threads
     monkeypatch.setattr(dp, "SERIAL_SWEEP_READS", 0)  # the choice runs on this small model
     monkeypatch.setattr(dp.ThreadChoice, "RECHECK", 1)  # and switches as often as it can
     mdp = PatrolModel(PatrolParams(N=6, stations=(0, 3), Gamma=4)).mdp()
     model = mdp if form == "post-decision" else exact_rows(mdp)
-    before = numba.get_num_threads()
+    before = pool.get_threads()
     results = []
-    for threads in (2, 1, 2):
-        numba.set_num_threads(threads)
+    for k in (2, 1, 2):
+        pool.set_threads(k)
         try:
             results.append(lb.solve_exact(model, method, tol=1e-6))
         finally:
-            numba.set_num_threads(before)
+            pool.set_threads(before)
     for r in results[1:]:
         np.testing.assert_array_equal(r.values, results[0].values)
         np.testing.assert_array_equal(r.policy, results[0].policy)
         assert r.history == results[0].history
-    assert numba.get_num_threads() == before  # restored
+    assert pool.get_threads() == before  # restored
 
 
 def test_thread_choice_follows_the_timings(monkeypatch):
-    numba = _numba_threads()
+    pool = _two_threads()
     from lpbounds import dp
 
-    monkeypatch.setattr(_backend, "SMALL_READS", COMPILED)
     monkeypatch.setattr(dp, "SERIAL_SWEEP_READS", 0)
-    before = numba.get_num_threads()
-    numba.set_num_threads(2)
+    before = pool.get_threads()
+    pool.set_threads(2)
     try:
         rows = exact_rows(lb.garnet(20, 2, 2))
         for fast, slow in ((1, 2), (2, 1)):
@@ -560,7 +559,7 @@ def test_thread_choice_follows_the_timings(monkeypatch):
             ch.stop("policy", kp, 1.0)
             for _ in range(n_cal, ch.RECHECK):  # no recheck before RECHECK sweeps
                 k = ch.start("max")
-                assert k == fast and numba.get_num_threads() == fast
+                assert k == fast and pool.get_threads() == fast
                 ch.stop("max", k, 1.0)
             k = ch.start("max")  # the recheck: the other count, once
             assert k == slow
@@ -573,7 +572,7 @@ def test_thread_choice_follows_the_timings(monkeypatch):
             ch.stop("max", k, 0.4)  # much faster: switched, for this kind only
             assert ch.chosen["max"] == slow and ch.chosen["policy"] == fast
             ch.restore()
-            assert numba.get_num_threads() == 2
+            assert pool.get_threads() == 2
         # all threads only when clearly faster (PREFER): 10% is not enough
         ch = dp.ThreadChoice(rows)
         for _ in range(ch.n_calibrate):
@@ -595,7 +594,7 @@ def test_thread_choice_follows_the_timings(monkeypatch):
         assert ch.chosen["max"] == 2
         ch.restore()
     finally:
-        numba.set_num_threads(before)
+        pool.set_threads(before)
 
 
 # ---------------------------------------------------------------------- packed policy rows

@@ -188,17 +188,17 @@ def test_native_sweeps_refuse_what_they_cannot_read():
         C.policy_sweep_stats(sel, reward[:-1], targets, probs, 0.9, v, out, 0, 10)
 
 
-def test_thread_count_is_shared_with_numba():
-    # dispatch's count drives both: after set_threads(1) the native sweeps and numba (once
-    # imported: dispatch never imports it) run on one thread; restored after
-    import numba
+def test_thread_count_is_shared_by_every_c_kernel():
+    # dispatch's count drives every C kernel: after set_threads(1) the native sweeps and the
+    # row kernels (lpbounds._kernels.ckernels) run on one thread; restored after
+    from lpbounds._kernels import ckernels, threads
 
     before = dispatch.get_threads()
-    assert before == numba.get_num_threads()
+    assert before == native.get_threads() == threads.get_threads()
     try:
         dispatch.set_threads(1)
         assert native.get_threads() == 1 and dispatch.get_threads() == 1
-        assert numba.get_num_threads() == 1
+        assert threads.split_ranges(10 * ckernels.PARALLEL_READS).size == 2  # one range
     finally:
         dispatch.set_threads(before)
     assert dispatch.get_threads() == before

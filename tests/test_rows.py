@@ -132,17 +132,18 @@ def test_maxmin_operator_matches_loops():
 
 @pytest.fixture(params=["numpy", "compiled"])
 def kernels(request, monkeypatch):
-    """Run a test on each kernel path (:mod:`lpbounds._kernels.dispatch`); yields the two modules
-    that path calls: (aggregation kernels, sweep kernels)."""
-    from lpbounds._kernels import aggregate as _aggregate
-    from lpbounds._kernels import compiled as _kernels
+    """Run a test on each kernel path: the library on the numpy twins or on the C kernels
+    (every call's work split over the threads); yields the two modules that path calls:
+    (aggregation kernels, sweep kernels)."""
+    from lpbounds._kernels import ckernels as _kernels
     from lpbounds._kernels import dispatch as _backend
     from lpbounds._kernels import twins as _npkernels
 
     if request.param == "compiled":
-        monkeypatch.setattr(_backend, "SMALL_READS", 0)
-        return _aggregate, _kernels
-    monkeypatch.setattr(_backend, "SMALL_READS", 10**18)
+        monkeypatch.setattr(_kernels, "PARALLEL_READS", 0)
+        return _kernels, _kernels
+    monkeypatch.setattr(_backend, "kernels", lambda: _npkernels)
+    monkeypatch.setattr(_backend, "row_sweeps", lambda: _npkernels)
     return _npkernels, _npkernels
 
 
@@ -183,9 +184,9 @@ def test_mark_groups_detects_equal_keys_of_different_rows(kernels):
     pbits = np.zeros((4, 2), dtype=np.int64)
     new = np.empty(4, dtype=bool)
     order = np.arange(4)
-    assert agg.mark_groups(order, oa, key, t, pbits, new, 2)
+    assert agg.mark_groups(order, oa, key, t, pbits, new)
     np.testing.assert_array_equal(new, [True, False, True, True])
-    assert not agg.mark_groups(order[:2], oa, key, t, pbits, new, 2)
+    assert not agg.mark_groups(order[:2], oa, key, t, pbits, new)
 
 
 def test_from_arrays_validation():

@@ -1,6 +1,7 @@
-"""Start-up: ``import lpbounds`` and ``lpbounds [SUBCOMMAND] --help`` load none of the heavy
-dependencies, the lazy public names behave like eager ones, and a small model's first solve
-needs no compiled kernel (so it never waits for numba).
+"""Start-up: ``import lpbounds``, ``lpbounds [SUBCOMMAND] --help`` and the commands whose
+work needs no LP (``solve`` by exact DP, ``models``) load none of the heavy dependencies,
+the lazy public names behave like eager ones, and no solve, small or large, needs a JIT
+compiler: the kernels are C, built at install (numba is no dependency).
 
 Each check runs in a fresh interpreter: what a module imports is only visible there.
 Timings are measured by ``benchmarks/bench_startup.py``, never asserted here.
@@ -13,15 +14,23 @@ import json
 import os
 import subprocess
 import sys
-from types import SimpleNamespace
+from pathlib import Path
 
 import pytest
 
 import lpbounds
-from lpbounds._kernels import dispatch as _backend
 from lpbounds.cli.main import COMMANDS
 
-HEAVY = ("cvxpy", "matplotlib", "pandas", "numba")
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Packages a command loads only when its work needs them: the LP stack (cvxpy and the
+#: scipy.stats it imports, the solvers), the figures, the tables of studies, the optional
+#: Gymnasium and Dask, and numba (no dependency any more, but still installed beside
+#: lpbounds by QuantEcon: it must not come back through an import).
+HEAVY = (
+    "cvxpy", "matplotlib", "pandas", "gymnasium", "numba", "dask", "scipy.stats", "highspy",
+    "clarabel",
+)  # fmt: skip
 #: The heavy dependencies, the patrol package and the DP core, none needed to print help.
 NOT_FOR_HELP = (*HEAVY, "lpbounds.patrol", "lpbounds.dp", "lpbounds.studies.compare", "numpy")
 
@@ -44,21 +53,46 @@ def test_import_lpbounds_loads_no_heavy_dependency():
 
 
 def test_the_probe_sees_a_heavy_import():
-    # the check above can fail: the same probe reports numba once the DP kernels load
-    assert imported_by("import lpbounds._kernels.compiled") == ["numba"]
+    # the checks here can fail: the same probe reports cvxpy (and the scipy.stats it
+    # imports) once a formulation loads, and nothing for the formulations' table of contents
+    assert imported_by("import lpbounds.formulations") == []
+    assert "cvxpy" in imported_by("from lpbounds.formulations import RLP")
+    assert "scipy.stats" in imported_by("from lpbounds.formulations import RLP")
+
+
+def _command(argv: list[str]) -> str:
+    """Code that runs ``lpbounds ARGV`` in this process (help's SystemExit is its end)."""
+    return (
+        f"import sys\nsys.argv = {['lpbounds', *argv]!r}\nfrom lpbounds.cli.main import main\n"
+        "try:\n    code = main()\nexcept SystemExit as exc:\n    code = exc.code\n"
+        "assert code == 0, code\n"
+    )
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["solve", "forest"],  # a shelf model, exact DP
+        ["solve", "models/garnet-small.toml"],  # an instance file, exact DP
+        ["models"],  # the listing: sizes from parameters, Gymnasium only looked for
+    ],
+    ids=lambda a: " ".join(a),
+)
+def test_a_command_loads_only_what_its_work_needs(argv, monkeypatch):
+    """Exact DP needs no LP stack, no figures, no tables of studies; the model listing
+    needs none of them either, nor Gymnasium (``importlib.util.find_spec`` tells whether
+    it is installed)."""
+    monkeypatch.chdir(ROOT)
+    assert imported_by(_command(argv)) == []
 
 
 @pytest.mark.parametrize("command", ["", *COMMANDS])
 def test_help_loads_no_heavy_dependency(command):
-    argv = ["lpbounds", *([command] if command else []), "--help"]
-    code = (
-        f"import sys\nsys.argv = {argv!r}\nfrom lpbounds.cli.main import main\n"
-        "try:\n    main()\nexcept SystemExit as exc:\n    assert exc.code == 0, exc.code\n"
-    )
-    assert imported_by(code, NOT_FOR_HELP) == []
+    argv = [*([command] if command else []), "--help"]
+    assert imported_by(_command(argv), NOT_FOR_HELP) == []
 
 
-def test_a_small_first_solve_needs_no_compiled_kernel():
+def test_a_small_first_solve_needs_no_jit():
     code = """
 import lpbounds as lb
 mdp = lb.garnet(300, 3, 4, 0.9, seed=7)
@@ -67,23 +101,28 @@ rows = lb.BellmanRows.aggregate(mdp, lb.random_partition(300, 30, seed=11))
 cert = lb.certify(rows, lb.solve_exact(rows).values)
 assert dp.error_bound < 1e-7 and cert.error_bound < 1e-6
 """
-    compiled = ("numba", "lpbounds._kernels.compiled", "lpbounds._kernels.aggregate")
-    assert imported_by(code, compiled) == []
+    assert imported_by(code, ("numba", "llvmlite")) == []
 
 
-def test_a_large_row_solve_needs_no_numba():
-    """A random MDP above the numpy path's size runs on the native (C) row sweeps: its
+def test_a_large_solve_and_aggregation_need_no_numba():
+    """A random MDP whose sweeps split over the threads runs on the C kernels (the row
+    sweeps, and the aggregation, Q-values and game operator of its RLP and NLP rows): its
     process imports no numba (0.5 s of start-up and first call, docs/benchmarks.md)."""
     code = """
 import lpbounds as lb
-from lpbounds._kernels import dispatch
+from lpbounds._kernels import ckernels
 mdp = lb.garnet(20_000, 3, 5, 0.9, seed=7)  # 300,000 reads per sweep
-assert mdp.n_states * 15 >= dispatch.SMALL_READS
+assert mdp.n_states * 15 >= ckernels.PARALLEL_READS
 dp = lb.solve_exact(mdp)
 ev = lb.evaluate_policy(mdp, dp.policy, method="iterative")
 assert dp.error_bound < 1e-9 and ev.error_bound < 1e-9
+part = lb.random_partition(20_000, 2_000, seed=1)
+low = lb.BellmanRows.aggregate(mdp, part, reduce="min")
+low.apply_maxmin(low.q_values(dp.values[:2_000])[:2_000] * 0)
 """
-    assert imported_by(code, ("numba", "lpbounds._kernels.native")) == ["lpbounds._kernels.native"]
+    kernels = ("numba", "lpbounds._kernels.native", "lpbounds._kernels.ckernels")
+    want = ["lpbounds._kernels.ckernels", "lpbounds._kernels.native"]
+    assert imported_by(code, kernels) == want
 
 
 @pytest.mark.parametrize("name", lpbounds.__all__)
@@ -115,42 +154,27 @@ def test_submodules_are_reachable_as_attributes():
     assert imported_by(code) == []
 
 
-def _dispatcher(index_path: str, overloads: dict[object, object]) -> SimpleNamespace:
-    cache = SimpleNamespace(_cache_file=SimpleNamespace(_index_path=index_path))
-    return SimpleNamespace(_cache=cache, overloads=overloads)
-
-
-def test_needs_compile_reads_the_cache_index(tmp_path):
-    index = tmp_path / "k.nbi"
-    index.write_bytes(b"")
-    cached = SimpleNamespace(k=_dispatcher(str(index), {}))
-    missing = SimpleNamespace(k=_dispatcher(str(tmp_path / "none.nbi"), {}))
-    loaded = SimpleNamespace(k=_dispatcher(str(tmp_path / "none.nbi"), {"sig": object()}))
-    assert not _backend._needs_compile(cached, ("k",))  # type: ignore[arg-type]
-    assert _backend._needs_compile(missing, ("k",))  # type: ignore[arg-type]
-    assert not _backend._needs_compile(loaded, ("k",))  # type: ignore[arg-type]
-    # a group is announced only when none of its kernels is cached or loaded: one cached
-    # kernel means the cache is warm (the group's unused kernels must not announce a
-    # compile on every run)
-    group = SimpleNamespace(
-        k=_dispatcher(str(tmp_path / "none.nbi"), {}), j=_dispatcher(str(index), {})
-    )
-    assert not _backend._needs_compile(group, ("k", "j"))  # type: ignore[arg-type]
-    both_missing = SimpleNamespace(k=missing.k, j=missing.k)
-    assert _backend._needs_compile(both_missing, ("k", "j"))  # type: ignore[arg-type]
-
-
-def test_an_empty_numba_cache_is_detected(tmp_path):
-    """In a fresh environment every kernel group would compile (and would be announced)."""
-    code = (
-        "from lpbounds._kernels import aggregate as _aggregate, compiled as _kernels\n"
-        "from lpbounds._kernels import dispatch as _backend\n"
-        "mods = {'aggregate': _aggregate}\n"
-        "assert all(_backend._needs_compile(mods.get(g, _kernels), names)\n"
-        "           for g, (_, _, names) in _backend._GROUPS.items())\n"
-    )
+def test_an_empty_numba_cache_stays_empty(tmp_path):
+    """In a fresh environment nothing compiles: a large RLP aggregation, its fixed point and
+    a post-decision solve write nothing into numba's (empty) cache and announce nothing."""
+    code = """
+import lpbounds as lb
+mdp = lb.garnet(50_000, 3, 5, 0.9, seed=3, shared_probabilities=True)
+rows = lb.BellmanRows.aggregate(mdp, lb.random_partition(50_000, 500, seed=4))
+assert lb.solve_exact(rows).error_bound < 1e-6
+import numpy as np
+rng = np.random.default_rng(5)  # a model in post-decision form: succ[x, u] = g[f0[x, u]]
+g = rng.integers(0, 50_000, size=(50_000, 4))
+g[:, 0] = np.arange(50_000)
+post = lb.FiniteMDP(g[rng.integers(0, 50_000, size=(50_000, 3))], [0.4, 0.3, 0.2, 0.1],
+                    rng.normal(size=(50_000, 3)), 0.9)
+assert lb.solve_exact(post).error_bound < 1e-6
+assert lb.dp.post_decision_rows(post) is not None
+"""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     proc = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
+    assert list(tmp_path.iterdir()) == []
+    assert "compil" not in proc.stderr, proc.stderr[-2000:]

@@ -30,7 +30,7 @@ from lpbounds.rows import BellmanRows, PolicySweeps, PostDecisionRows, SweepOper
 from lpbounds.status import Status
 
 SRC = Path(dp.__file__).resolve().parents[1]
-#: a small patrol (numpy array path) and one above SMALL_READS (compiled array path)
+#: a small patrol (one range per C sweep) and one whose sweeps split over the threads
 PARAMS = {
     "small": PatrolParams(N=5, stations=(0, 2), D=2, Gamma=6),
     "compiled": PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=11),
@@ -176,7 +176,7 @@ def test_the_matrix_free_loops_keep_two_value_vectors():
     policies, and change (a third vector, as ``u + c`` into a new array, would fail)."""
     mf = MatrixFreePatrol(PatrolParams(N=6, stations=(0, 2, 4), D=2, Gamma=15))
     vec = 8 * mf.n_vars
-    sol = solve_vstar(mf)  # numba's kernels loaded, reward scale cached: not measured
+    sol = solve_vstar(mf)  # a first solve (the reward scale cached): not measured
     mf_evaluate(mf, sol.policy)
     del sol
     for run in (lambda: solve_vstar(mf), lambda: mf_evaluate(mf, np.zeros(mf.n_vars, np.int8))):

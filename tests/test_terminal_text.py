@@ -142,7 +142,7 @@ def test_a_log_record_during_a_progress_display_is_printed_once_above_it(capsys)
 
     buf = io.StringIO()
     term = Console(file=buf, force_terminal=True, width=60)
-    message = "numba is compiling something long enough to wrap " + "x" * 80
+    message = "a warning long enough to wrap the display's line " + "x" * 80
     with configure_output():
         lazy = LazyProgress(Progress(console=term, transient=True))
         task = lazy.add_task("working", total=3)
@@ -158,10 +158,11 @@ def test_a_log_record_during_a_progress_display_is_printed_once_above_it(capsys)
 
 
 @pytest.mark.slow
-def test_a_warm_run_prints_no_compile_notice(tmp_path):
-    """A model on the compiled path (20,000 x 3 x 4 = 240,000 reads per sweep) with an
-    empty numba cache: the first run compiles and says so, once, the second loads the
-    cache and says nothing."""
+def test_a_first_run_prints_no_compile_notice(tmp_path):
+    """A model whose sweeps run on several threads (20,000 x 3 x 4 = 240,000 reads per
+    sweep), solved twice in fresh processes, the first with an empty numba cache: neither
+    compiles anything or says so (the kernels are C, built at install), and the cache
+    stays empty."""
     import os
 
     model = tmp_path / "big.toml"
@@ -177,8 +178,8 @@ def test_a_warm_run_prints_no_compile_notice(tmp_path):
         assert proc.returncode == 0, proc.stderr
         assert "exact solve of big" in proc.stdout
         errs.append(proc.stderr)
-    assert errs[0].count("numba is compiling") == 1, errs[0]
-    assert "numba is compiling" not in errs[1], errs[1]
+    assert all("compil" not in err for err in errs), errs
+    assert not (tmp_path / "numba-cache").exists() or not any((tmp_path / "numba-cache").iterdir())
 
 
 # ---------------------------------------------------------------------- result texts

@@ -50,7 +50,7 @@ PARALLEL = max(1, min(2, os.cpu_count() or 1))
 ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
 #: packages whose version is part of an executed notebook's cache key
 KEY_PACKAGES = (
-    "numpy", "scipy", "matplotlib", "pandas", "highspy", "cvxpy", "clarabel", "numba",
+    "numpy", "scipy", "matplotlib", "pandas", "highspy", "cvxpy", "clarabel",
     "gymnasium", "ipykernel", "nbclient", "jupytext",
 )  # fmt: skip
 

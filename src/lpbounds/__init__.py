@@ -10,16 +10,16 @@ Data flows one way: model (:class:`FiniteMDP`, :class:`Partition`) -> Bellman ro
 (:class:`BellmanRows`) -> cvxpy problem -> result -> checks and reports.
 
 ``import lpbounds`` is cheap: the public names below are imported on first use
-(PEP 562), so neither numpy-heavy modules nor cvxpy, matplotlib, pandas or numba load
-until a function needs them.
+(PEP 562), so neither numpy-heavy modules nor cvxpy, matplotlib or pandas load until a
+function needs them.
 """
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ._defaults import VERSION
+from ._lazy import attach
 from .errors import (
     ConvergenceError,
     LPBoundsError,
@@ -141,17 +141,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """Import a public name's module on first access and cache the name here."""
-    module = _LAZY.get(name)
-    if module is not None:
-        value = getattr(importlib.import_module(f".{module}", __name__), name)
-        globals()[name] = value
-        return value
-    if name in _SUBMODULES:
-        return importlib.import_module(f".{_SUBMODULES[name]}", __name__)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY) | set(_SUBMODULES))
+__getattr__, __dir__ = attach(__name__, _LAZY, _SUBMODULES)

@@ -68,7 +68,7 @@ __all__ = [
 MANIFEST = "manifest.json"
 
 #: Packages whose versions every output records (``None`` when not installed).
-DEPENDENCIES: tuple[str, ...] = ("numpy", "scipy", "cvxpy", "highspy", "clarabel", "numba")
+DEPENDENCIES: tuple[str, ...] = ("numpy", "scipy", "cvxpy", "highspy", "clarabel")
 #: Solver packages (beyond the dependencies) whose versions every output records.
 SOLVER_PACKAGES: tuple[str, ...] = ("scs", "ecos", "osqp", "gurobipy", "mosek", "cylp")
 

@@ -202,13 +202,13 @@ def test_monte_carlo_is_reproducible_and_seeded(solved):
 def test_path_returns_equal_a_walk_on_the_mdp(solved, cv):
     """Each path's (corrected) return equals the sum along the same alert sequence walked
     on the MDP's arrays under greedy_policy's pi_s (no code of greedy_mc involved)."""
-    from lpbounds.patrol.greedy_mc import _Kernel, _returns_kernel
+    from lpbounds.patrol.greedy_mc import _Kernel, _returns
 
     pm, mdp, labels, b, pi_s = solved["busy"]
     lam, probs, w = mdp.discount, mdp.probabilities, b.lower[labels]
     y = alert_sequence(5 * 40, probs[0], pm.params.m, 2).reshape(5, 40)
     got = np.empty(5)
-    _returns_kernel(17, y, b.lower, _Kernel.of(pm.params).args(), cv, got)
+    _returns(17, y, b.lower, _Kernel.of(pm.params), cv, got)
     for p in range(5):
         x, g = 17, 0.0
         for t in range(40):
@@ -223,17 +223,18 @@ def test_path_returns_equal_a_walk_on_the_mdp(solved, cv):
 
 def test_parallel_paths_do_not_share_work_arrays(solved):
     """The same returns on 1 and on 2 threads (a race on shared buffers would differ)."""
-    numba = pytest.importorskip("numba")
+    from lpbounds._kernels import threads
+
     pm, _, _, b, _ = solved["busy"]
     kw = dict(starts=np.array([0, 7, 100]), paths=200, horizon=60, seed=4)
-    before = numba.get_num_threads()
+    before = threads.get_threads()
     try:
-        numba.set_num_threads(1)
+        threads.set_threads(1)
         one = greedy_value_mc(pm.params, b.lower, b.upper, **kw)
-        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        threads.set_threads(min(2, threads.default_threads()))
         two = greedy_value_mc(pm.params, b.lower, b.upper, **kw)
     finally:
-        numba.set_num_threads(before)
+        threads.set_threads(before)
     np.testing.assert_array_equal(one.mean, two.mean)
     np.testing.assert_array_equal(one.std, two.std)
 

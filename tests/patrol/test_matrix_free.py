@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from lpbounds import evaluate_policy, greedy_policy, solve_exact
-from lpbounds._kernels.dispatch import SMALL_READS
+from lpbounds._kernels.ckernels import PARALLEL_READS
 from lpbounds.errors import ValidationError
 from lpbounds.patrol import sweeps
 from lpbounds.patrol.greedy_mc import partition_bounds
@@ -19,7 +19,7 @@ from lpbounds.patrol.model import PatrolModel
 from lpbounds.patrol.params import PatrolParams
 from lpbounds.status import Status
 
-#: the shipped small model (numpy array path), one above SMALL_READS (compiled array path),
+#: the shipped small model (one range), one whose array-path sweeps split over the threads,
 #: one station (rows of one state), and the paper's literal loiter rule
 INSTANCES = {
     "small": params_from_instance("models/patrol-small.toml"),
@@ -36,9 +36,9 @@ def case(request):
     return request.param, params, pm, pm.mdp(), MatrixFreePatrol(params)
 
 
-def test_the_compiled_case_is_above_the_numpy_threshold():
+def test_the_compiled_case_splits_over_the_threads():
     p = INSTANCES["compiled"]
-    assert p.n_states * 3 * (p.m + 1) >= SMALL_READS
+    assert p.n_states * 3 * (p.m + 1) >= PARALLEL_READS
 
 
 @pytest.mark.parametrize("eval_sweeps", ["auto", 5])

@@ -9,14 +9,14 @@ per thread (equal shares of rows), run the first range on the calling thread and
 others on a pool, and combine the ranges' extremes (exact minima and maxima, so the
 split changes no number).
 
-Why not numba, like the other compiled kernels (:mod:`lpbounds._kernels.compiled`): a
-process that solves one mid-size model pays about 0.2 s to import numba and 0.3-0.4 s
-for its first call of a cached kernel (its typing and target registries, and an import
-of :mod:`scipy.linalg` for its BLAS check) — more than the solve of a 256,000-state model
-takes, and as much as a whole plain-scipy solve of it (``docs/benchmarks.md``, "Peers:
-exact DP"). These sweeps need neither, and run faster than their numba versions did
-(2.9 against 4.9 ms for an improvement sweep of the 256,000 x 3 x 5 garnet on two
-threads: the loop over a shared distribution's outcomes is unrolled).
+Why C compiled at install, as every kernel of lpbounds is (``extensions``): when these
+sweeps were numba's, a process that solved one mid-size model paid about 0.2 s to import
+numba and 0.3-0.4 s for its first call of a cached kernel (its typing and target
+registries, and an import of :mod:`scipy.linalg` for its BLAS check) — more than the
+solve of a 256,000-state model takes (``docs/benchmarks.md``, "Peers: exact DP"). These
+sweeps need neither, and run faster than their numba versions did (2.9 against 4.9 ms for
+an improvement sweep of the 256,000 x 3 x 5 garnet on two threads: the loop over a shared
+distribution's outcomes is unrolled).
 
 The arithmetic is that of the numpy twins (:mod:`lpbounds._kernels.twins`), so the
 numbers are bit-identical to theirs and to what the numba versions gave
@@ -51,15 +51,8 @@ from typing import Any
 
 import numpy as np
 
+from .extensions import rowsweeps as _c
 from .threads import default_threads, get_threads, run_ranges, set_threads, split_ranges
-
-try:
-    from . import rowsweeps as _c
-except ImportError as exc:  # pragma: no cover - a source tree without the build
-    raise ImportError(
-        "lpbounds' compiled row sweeps (lpbounds._kernels.rowsweeps) are not built: "
-        "install lpbounds with pip (`pip install -e .` in a checkout), which compiles them"
-    ) from exc
 
 __all__ = [
     "bellman_max_stats",

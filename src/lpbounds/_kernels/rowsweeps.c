@@ -34,67 +34,7 @@
 #include <stdint.h>
 #include <string.h>
 
-typedef struct {
-    Py_buffer b;
-    int held;
-} Buf;
-
-/* 'f' float64, 'i' signed integer, 'b' bool, in native byte order; -1 for anything else */
-static int kind_of(const Py_buffer *b) {
-    const char *f = b->format ? b->format : "B";
-    const uint16_t one = 1;
-    const char native_order = *(const char *)&one ? '<' : '>';
-    while (*f == '@' || *f == '=' || *f == native_order)
-        f++;
-    if (f[0] == '\0' || f[1] != '\0')
-        return -1;
-    switch (f[0]) {
-    case 'd':
-        return b->itemsize == 8 ? 'f' : -1;
-    case 'i': case 'l': case 'q': case 'n':
-        return 'i';
-    case '?':
-        return 'b';
-    default:
-        return -1;
-    }
-}
-
-/* A buffer of ``ndim`` dimensions, kind ``kind`` and item size ``itemsize`` (0: 4 or 8),
- * C-contiguous unless ``strided``; sets a TypeError naming the argument otherwise. */
-static int get(PyObject *o, Buf *out, const char *name, int ndim, int kind, int itemsize,
-               int writable, int strided) {
-    int flags = PyBUF_FORMAT | PyBUF_STRIDES | (writable ? PyBUF_WRITABLE : 0);
-    if (PyObject_GetBuffer(o, &out->b, flags) < 0) {
-        PyErr_Clear();
-        PyErr_Format(PyExc_TypeError, "%s: expected a%s array", name, writable ? " writable" : "");
-        return -1;
-    }
-    out->held = 1;
-    int size_ok = itemsize ? out->b.itemsize == itemsize
-                           : (out->b.itemsize == 4 || out->b.itemsize == 8);
-    if (kind_of(&out->b) != kind || out->b.ndim != ndim || !size_ok) {
-        PyErr_Format(PyExc_TypeError, "%s: wrong dtype or number of dimensions", name);
-        return -1;
-    }
-    if (!strided) {
-        Py_ssize_t s = out->b.itemsize;
-        for (int d = ndim - 1; d >= 0; d--) {
-            if (out->b.shape[d] > 1 && out->b.strides[d] != s) {
-                PyErr_Format(PyExc_TypeError, "%s: not C-contiguous", name);
-                return -1;
-            }
-            s *= out->b.shape[d];
-        }
-    }
-    return 0;
-}
-
-static void release(Buf *bs, int n) {
-    for (int i = 0; i < n; i++)
-        if (bs[i].held)
-            PyBuffer_Release(&bs[i].b);
-}
+#include "buffers.h"
 
 /* The rows' data as the loops read it. */
 typedef struct {
@@ -350,15 +290,6 @@ static int raise_bad(const Bad *bad, const Rows *rw) {
     return 0;
 }
 
-/* [start, end) within [0, n] */
-static int check_range(Py_ssize_t start, Py_ssize_t end, Py_ssize_t n) {
-    if (start < 0 || end < start || end > n) {
-        PyErr_Format(PyExc_ValueError, "range [%zd, %zd) outside [0, %zd)", start, end, n);
-        return -1;
-    }
-    return 0;
-}
-
 /* the rows' buffers: reward (R,), targets (R, L), probs (R, L) strided */
 static int get_rows(PyObject *reward, PyObject *targets, PyObject *probs, double lam, Buf *b,
                     Rows *rw, int *t64) {
@@ -391,7 +322,7 @@ PyDoc_STRVAR(bellman_max_stats_doc,
              "not an entry of v, ValueError for an indptr outside 0..R or decreasing. Releases "
              "the GIL.");
 
-static PyObject *bellman_max_stats(PyObject *self, PyObject *args) {
+static PyObject *bellman_max_stats(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_ip, *o_rew, *o_t, *o_p, *o_v, *o_out, *o_arg;
     double lam;
     Py_ssize_t start, end;
@@ -436,7 +367,7 @@ PyDoc_STRVAR(policy_sweep_stats_doc,
              "range. Raises IndexError for a row outside the rows or a target that is not an entry "
              "of v. Releases the GIL.");
 
-static PyObject *policy_sweep_stats(PyObject *self, PyObject *args) {
+static PyObject *policy_sweep_stats(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_rows, *o_rew, *o_t, *o_p, *o_v, *o_out;
     double lam;
     Py_ssize_t start, end;
@@ -488,7 +419,7 @@ PyDoc_STRVAR(gather_rows_doc,
              "copy_probs, start, end)\n\nRow sel[i] into slot i of the out_ arrays for "
              "start <= i < end (out_probs only when copy_probs). Releases the GIL.");
 
-static PyObject *gather_rows(PyObject *self, PyObject *args) {
+static PyObject *gather_rows(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_sel, *o_rew, *o_t, *o_p, *o_orew, *o_ot, *o_op;
     int copy_probs;
     Py_ssize_t start, end;
@@ -547,7 +478,7 @@ PyDoc_STRVAR(check_successors_doc,
              "count on allowed pairs, the first one's flat index (-1 if none), their count on "
              "disallowed pairs. One pass, no temporaries. Releases the GIL.");
 
-static PyObject *check_successors(PyObject *self, PyObject *args) {
+static PyObject *check_successors(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *o_s, *o_a;
     long long n;
     Py_ssize_t start, end;

@@ -4,8 +4,13 @@ Every compiled kernel works on one range of its owners (states, rows, outcomes) 
 releases the GIL; :func:`split_ranges` cuts the owners into one range per thread and
 :func:`run_ranges` runs the first range on the calling thread and the others on a pool
 made once per process (a forked child makes its own). The thread count is
-:func:`get_threads`: ``NUMBA_NUM_THREADS`` if set (numba's rule, kept so a user's setting
-still applies), else the CPUs this process may run on; :func:`set_threads` changes it.
+:func:`get_threads`: the environment's ``LPBOUNDS_NUM_THREADS`` if set, else the CPUs this
+process may run on; :func:`set_threads` changes it within the process.
+
+``NUMBA_NUM_THREADS`` is still read when ``LPBOUNDS_NUM_THREADS`` is not set: the kernels
+were numba's until issue 39, whose thread count that variable set, and job scripts that
+limit lpbounds on a shared machine with it keep doing so (dropping it silently would give
+such a job every CPU of the node). numba itself is no longer used.
 """
 
 from __future__ import annotations
@@ -19,7 +24,10 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ValidationError
+
 __all__ = [
+    "THREAD_VARIABLES",
     "default_threads",
     "get_threads",
     "run_ranges",
@@ -29,10 +37,28 @@ __all__ = [
 ]
 
 
+#: The environment variables that set the thread count, the first one set winning.
+THREAD_VARIABLES: tuple[str, ...] = ("LPBOUNDS_NUM_THREADS", "NUMBA_NUM_THREADS")
+
+
 def default_threads() -> int:
-    """numba's default thread count: ``NUMBA_NUM_THREADS``, else the usable CPUs."""
-    env = os.environ.get("NUMBA_NUM_THREADS", "").strip()
-    if env.isdigit() and int(env) > 0:
+    """The thread count of the environment: the first of :data:`THREAD_VARIABLES` that is
+    set (and not empty), else the CPUs this process may run on.
+
+    Raises
+    ------
+    ValidationError
+        When that variable is not a positive integer (a typo must not give a job every
+        CPU of a shared machine).
+    """
+    for name in THREAD_VARIABLES:
+        env = os.environ.get(name, "").strip()
+        if not env:
+            continue
+        if not (env.isdigit() and int(env) > 0):
+            raise ValidationError(
+                f"{name} = {env!r}: the threads of lpbounds' kernels must be a positive integer"
+            )
         return int(env)
     try:
         return max(1, len(os.sched_getaffinity(0)))
@@ -51,7 +77,7 @@ def get_threads() -> int:
 
 
 def set_threads(k: int) -> None:
-    """Use ``k`` threads (1 to :func:`default_threads`, as numba allows)."""
+    """Use ``k`` threads (1 to :func:`default_threads`)."""
     global _threads
     limit = default_threads()
     if not 1 <= int(k) <= limit:

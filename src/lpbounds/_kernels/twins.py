@@ -1,20 +1,21 @@
-"""Plain-numpy twins of the compiled kernels of :mod:`lpbounds._kernels.compiled`,
-:mod:`lpbounds._kernels.aggregate` and :mod:`lpbounds._kernels.native`, for small models.
+"""Plain-numpy twins of the C kernels of :mod:`lpbounds._kernels.ckernels` and
+:mod:`lpbounds._kernels.native`: the reference the tests compare them with.
 
-Each function has the name, arguments and outputs of its compiled twin and the same
+Each function has the name, arguments and outputs of its C twin and the same
 arithmetic: a row's value is ``acc = 0.0; acc += probs[r, l] * v[targets[r, l]]`` for
 ``l = 0, 1, ...`` (one multiply and one add per outcome, in outcome order, no fused
 multiply-add), then ``reward[r] + discount * acc``; a max (min) keeps the *first* row or
 action that attains it and never picks a NaN; the residual extremes ignore NaNs. So the
-two paths return the same numbers (up to the sign of a zero residual extreme), which
-``tests/test_fast_paths.py`` checks bit for bit on random models with action masks, and
-the rounding analysis of :mod:`lpbounds.certification.certificate` and
-:func:`lpbounds.tolerances.error_bound` covers both.
+two return the same numbers (up to the sign of a zero residual extreme), which
+``tests/test_ckernels.py``, ``tests/test_native.py`` and ``tests/test_fast_paths.py``
+check bit for bit on random models with action masks (kernel by kernel, and whole solves
+with the library running on the twins); the rounding analysis of
+:mod:`lpbounds.certification.certificate` and :func:`lpbounds.tolerances.error_bound`
+covers both.
 
 Loops run over the (few) outcomes or actions, never over states or rows: a sweep costs a
-few numpy calls per outcome, which on a model of a few thousand rows is far less than
-the seconds a first compile takes (:mod:`lpbounds._kernels.dispatch` picks the path by size).
-``nchunks`` arguments only balance the compiled kernels' threads and are ignored here.
+few numpy calls per outcome. The library itself always runs the C kernels (faster at
+every size, :mod:`lpbounds._kernels.dispatch`); these are written to be read and checked.
 """
 
 from __future__ import annotations
@@ -37,7 +38,9 @@ def _expect(targets: np.ndarray, probs: Any, v: np.ndarray) -> np.ndarray:
     return acc
 
 
-def _q(reward: np.ndarray, targets: np.ndarray, probs: Any, discount: float, v: np.ndarray):
+def _q(
+    reward: np.ndarray, targets: np.ndarray, probs: Any, discount: float, v: np.ndarray
+) -> np.ndarray:
     return reward + discount * _expect(targets, probs, v)
 
 
@@ -62,13 +65,32 @@ def _first_max(q: np.ndarray, starts: np.ndarray, n_items: int) -> tuple[np.ndar
 
 
 # ---------------------------------------------------------------------- row kernels
-def q_values(reward, targets, probs, discount, v, out):
+def q_values(
+    reward: np.ndarray,
+    targets: np.ndarray,
+    probs: Any,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+) -> None:
     """``out[r] = reward[r] + discount * sum_l probs[r, l] v[targets[r, l]]``."""
     out[:] = _q(reward, targets, probs, discount, v)
 
 
-def bellman_maxmin(indptr, action, reward, targets, probs, discount, v, out, arg):
-    """Stochastic-game operator (see :func:`lpbounds._kernels.compiled.bellman_maxmin`)."""
+def bellman_maxmin(
+    indptr: np.ndarray,
+    action: np.ndarray,
+    reward: np.ndarray,
+    targets: np.ndarray,
+    probs: Any,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+    arg: np.ndarray,
+) -> None:
+    """Stochastic-game operator: ``out[i]`` the max over the actions of owner ``i``'s rows
+    (sorted by action) of the min of ``q_r`` over that action's rows; ``arg[i]`` the
+    minimising row of the first maximising action."""
     n_rows = targets.shape[0]
     q = _q(reward, targets, probs, discount, v)
     starts = np.zeros(n_rows, dtype=bool)
@@ -90,7 +112,13 @@ def bellman_maxmin(indptr, action, reward, targets, probs, discount, v, out, arg
     arg[:] = np.where(g_idx >= 0, low_r[np.maximum(g_idx, 0)], -1)
 
 
-def hash_rows(owner, action, targets, probbits, out):
+def hash_rows(
+    owner: np.ndarray,
+    action: np.ndarray,
+    targets: np.ndarray,
+    probbits: np.ndarray,
+    out: np.ndarray,
+) -> None:
     """A 64-bit hash of (owner, action, targets, probabilities' bits) per row."""
     with np.errstate(over="ignore"):
         h = np.full(owner.shape[0], _SEED, dtype=np.uint64)
@@ -106,7 +134,16 @@ def hash_rows(owner, action, targets, probbits, out):
     out[:] = h
 
 
-def bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg):
+def bellman_max_stats(
+    indptr: np.ndarray,
+    reward: np.ndarray,
+    targets: np.ndarray,
+    probs: Any,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+    arg: np.ndarray,
+) -> tuple[float, float]:
     """``out[i] = max_r q_r`` over owner ``i``'s rows, ``arg[i]`` the first maximising row;
     returns the extremes of ``out - v``."""
     q = _q(reward, targets, probs, discount, v)
@@ -116,7 +153,15 @@ def bellman_max_stats(indptr, reward, targets, probs, discount, v, out, arg):
     return _extremes(out - v)
 
 
-def policy_sweep_stats(rows, reward, targets, probs, discount, v, out):
+def policy_sweep_stats(
+    rows: np.ndarray | None,
+    reward: np.ndarray,
+    targets: np.ndarray,
+    probs: Any,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+) -> tuple[float, float]:
     """``out[i] = q_{rows[i]}(v)`` (``rows`` None: ``q_i``); returns the extremes of
     ``out - v``."""
     if rows is None:
@@ -126,7 +171,16 @@ def policy_sweep_stats(rows, reward, targets, probs, discount, v, out):
     return _extremes(out - v)
 
 
-def gather_rows(sel, reward, targets, probs, out_reward, out_targets, out_probs, copy_probs):
+def gather_rows(
+    sel: np.ndarray,
+    reward: np.ndarray,
+    targets: np.ndarray,
+    probs: Any,
+    out_reward: np.ndarray,
+    out_targets: np.ndarray,
+    out_probs: np.ndarray,
+    copy_probs: bool,
+) -> None:
     """Row ``sel[i]`` into slot ``i`` of the ``out_*`` arrays (``out_probs`` only when
     ``copy_probs``)."""
     out_reward[:] = reward[sel]
@@ -135,7 +189,7 @@ def gather_rows(sel, reward, targets, probs, out_reward, out_targets, out_probs,
         out_probs[:] = probs[sel]
 
 
-def check_successors(succ, allow, n):
+def check_successors(succ: np.ndarray, allow: np.ndarray, n: int) -> tuple[int, int, int]:
     """Out-of-range successors: (count on allowed pairs, first flat index, count elsewhere)."""
     bad = (succ < 0) | (succ >= n)
     on_allowed = bad & allow[:, :, None]
@@ -145,25 +199,31 @@ def check_successors(succ, allow, n):
 
 
 # ---------------------------------------------------------------------- post-decision form
-def ps_mark(succ, allowed, seen):
+def ps_mark(succ: np.ndarray, allowed: np.ndarray, seen: np.ndarray) -> None:
     """``seen[succ[x, u, 0]] = True`` for every allowed pair."""
     seen[succ[:, :, 0][allowed]] = True
 
 
-def ps_fill(succ, allowed, post_id, outcomes, first):
+def ps_fill(
+    succ: np.ndarray,
+    allowed: np.ndarray,
+    post_id: np.ndarray,
+    outcomes: np.ndarray,
+    first: np.ndarray,
+) -> None:
     """``first[x, u] = post_id[succ[x, u, 0]]`` (-1 if disallowed) and the outcome tuples."""
     k = post_id[succ[:, :, 0]]
     first[:] = np.where(allowed, k, -1)
     outcomes[k[allowed]] = succ[allowed]
 
 
-def ps_verify(succ, first, outcomes, nchunks):
+def ps_verify(succ: np.ndarray, first: np.ndarray, outcomes: np.ndarray) -> int:
     """1 if some allowed pair's tuple differs from its ``outcomes`` row, else 0."""
     ok = first >= 0
     return int(not np.array_equal(outcomes[first[ok]], succ[ok]))
 
 
-def ps_expect(outcomes, probs, v, w):
+def ps_expect(outcomes: np.ndarray, probs: Any, v: np.ndarray, w: np.ndarray) -> None:
     """``w[k] = sum_l probs[l] v[outcomes[k, l]]``."""
     acc = np.zeros(outcomes.shape[0])
     for ll in range(outcomes.shape[1]):
@@ -192,54 +252,111 @@ def _ps_policy(q_sel: np.ndarray, v: np.ndarray, out: np.ndarray) -> tuple[float
     return _extremes(out - v)
 
 
-def ps_max_stats(first, reward, w, discount, v, out, arg, nchunks):
+def ps_max_stats(
+    first: np.ndarray,
+    reward: np.ndarray,
+    w: np.ndarray,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+    arg: np.ndarray,
+) -> tuple[float, float]:
     """``out[x] = max_u reward[x, u] + discount w[first[x, u]]``, the first maximising
     action in ``arg``; returns the extremes of ``out - v``."""
     return _ps_max(_ps_q(first, reward, w, discount), v, out, arg)
 
 
-def ps_policy_stats(first, reward, act, w, discount, v, out, nchunks):
-    """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``."""
+def ps_policy_stats(
+    first: np.ndarray,
+    reward: np.ndarray,
+    act: np.ndarray,
+    w: np.ndarray,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+) -> tuple[float, float]:
+    """``out[x] = reward[x, a] + discount w[first[x, a]]`` with ``a = act[x]``; ``-inf``
+    where ``a = -1`` (no action: :func:`ps_max_stats`' arg where none beats ``-inf``)."""
     x = np.arange(first.shape[0])
-    return _ps_policy(reward[x, act] + discount * w[first[x, act]], v, out)
+    return _ps_policy(_no_action(act, reward[x, act] + discount * w[first[x, act]]), v, out)
 
 
-def ps_rows(allowed, row_start, act, out):
-    """Row index (of :meth:`BellmanRows.from_mdp`) of the pair ``(x, act[x])``."""
+def _no_action(act: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``q`` with ``-inf`` where ``act`` is -1 (its entries there read the last action)."""
+    return np.where(np.asarray(act) == -1, -_INF, q)
+
+
+def ps_rows(allowed: np.ndarray, row_start: np.ndarray, act: np.ndarray, out: np.ndarray) -> None:
+    """Row index (of :meth:`BellmanRows.from_mdp`) of the pair ``(x, act[x])``; -1 where
+    ``act[x] = -1`` (no action)."""
     act = np.asarray(act, dtype=np.int64)
     before = np.cumsum(allowed, axis=1) - allowed  # allowed actions below each action
-    out[:] = row_start + before[np.arange(act.shape[0]), act]
+    out[:] = np.where(act == -1, -1, row_start + before[np.arange(act.shape[0]), act])
 
 
-def reward_codes(reward, bits, max_codes, codes, table):
-    """Dictionary-encode ``reward``: ``table[codes] == reward`` bit for bit; the number of
-    distinct values, or -1 if there are more than ``max_codes``."""
-    uniq, inv = np.unique(bits.reshape(-1), return_inverse=True)
+def reward_codes(reward: np.ndarray, max_codes: int, codes: np.ndarray, table: np.ndarray) -> int:
+    """Dictionary-encode ``reward``: ``table[codes] == reward`` bit for bit, the codes
+    numbering the distinct values (by their bits) in order of first appearance; the number
+    of distinct values, or -1 if there are more than ``max_codes``."""
+    bits = np.ascontiguousarray(reward, dtype=np.float64).view(np.int64).reshape(-1)
+    uniq, first, inv = np.unique(bits, return_index=True, return_inverse=True)
     if uniq.size > max_codes:
         return -1
-    codes[...] = inv.reshape(codes.shape)
-    table[: uniq.size] = uniq.view(np.float64)
+    by_first = np.argsort(first)  # code c is the c-th distinct value met
+    rank = np.empty(uniq.size, dtype=np.int64)
+    rank[by_first] = np.arange(uniq.size)
+    codes[...] = rank[inv.reshape(-1)].reshape(codes.shape)
+    table[: uniq.size] = uniq[by_first].view(np.float64)
     return int(uniq.size)
 
 
-def ps_max_stats_coded(first, codes, table, w, discount, v, out, arg, nchunks):
+def ps_max_stats_coded(
+    first: np.ndarray,
+    codes: np.ndarray,
+    table: np.ndarray,
+    w: np.ndarray,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+    arg: np.ndarray,
+) -> tuple[float, float]:
     """:func:`ps_max_stats` with rewards ``table[codes[x, u]]``."""
     return _ps_max(_ps_q(first, table[codes], w, discount), v, out, arg)
 
 
-def ps_policy_stats_coded(first, codes, table, act, w, discount, v, out, nchunks):
+def ps_policy_stats_coded(
+    first: np.ndarray,
+    codes: np.ndarray,
+    table: np.ndarray,
+    act: np.ndarray,
+    w: np.ndarray,
+    discount: float,
+    v: np.ndarray,
+    out: np.ndarray,
+) -> tuple[float, float]:
     """:func:`ps_policy_stats` with rewards ``table[codes[x, u]]``."""
     x = np.arange(first.shape[0])
-    return _ps_policy(table[codes[x, act]] + discount * w[first[x, act]], v, out)
+    return _ps_policy(_no_action(act, table[codes[x, act]] + discount * w[first[x, act]]), v, out)
 
 
 # ---------------------------------------------------------------------- aggregation
 def canonical_rows(
-    labels, state, action, succ, probs, n_actions, out_owner, out_t, out_p, out_oa, out_key, nchunks
-):
-    """Aggregated, canonical rows, their ``owner * A + action`` and hash (see
-    :mod:`lpbounds._kernels.aggregate`): targets mapped to partitions and stably sorted, equal
-    targets merged (probabilities summed in sorted order), zero probabilities dropped."""
+    labels: np.ndarray,
+    state: np.ndarray,
+    action: np.ndarray,
+    succ: np.ndarray,
+    probs: Any,
+    n_actions: int,
+    out_owner: np.ndarray,
+    out_t: np.ndarray,
+    out_p: np.ndarray,
+    out_oa: np.ndarray,
+    out_key: np.ndarray,
+) -> None:
+    """Aggregated, canonical rows, their ``owner * A + action`` and hash: targets mapped to
+    partitions and stably sorted, equal targets merged (probabilities summed in sorted
+    order), zero probabilities dropped, each row padded with its first target at
+    probability 0 (see :meth:`lpbounds.rows.BellmanRows.aggregate`)."""
     n_rows, n_out = succ.shape
     t = labels[succ]
     perm = np.argsort(t, axis=1, kind="stable")
@@ -265,7 +382,7 @@ def canonical_rows(
     out_p[pad] = 0.0
     o = labels[state]
     out_owner[:] = o
-    scale = 9007199254740992.0  # 2**53, as in the compiled kernel
+    scale = 9007199254740992.0  # 2**53, as in the C kernel
     with np.errstate(over="ignore"):
         h = np.full(n_rows, _SEED, dtype=np.uint64)
         for a in range(n_out):
@@ -277,7 +394,14 @@ def canonical_rows(
     out_key[:] = h
 
 
-def mark_groups(order, oa, key, t, pbits, new, nchunks):
+def mark_groups(
+    order: np.ndarray,
+    oa: np.ndarray,
+    key: np.ndarray,
+    t: np.ndarray,
+    pbits: np.ndarray,
+    new: np.ndarray,
+) -> bool:
     """``new[i]``: sorted row ``i`` starts a group; True if two different rows of one bucket
     share a hash (a collision)."""
     n = order.shape[0]
@@ -291,7 +415,7 @@ def mark_groups(order, oa, key, t, pbits, new, nchunks):
     return bool((~bucket_differs & content_differs).any())
 
 
-def bucket_order(oa, n_buckets):
+def bucket_order(oa: np.ndarray, n_buckets: int) -> tuple[np.ndarray, np.ndarray]:
     """Stable sort of the rows by ``oa``: ``(order, bucket offsets)``."""
     order = np.argsort(oa, kind="stable").astype(np.int64)
     offsets = np.zeros(n_buckets + 1, dtype=np.int64)
@@ -299,15 +423,28 @@ def bucket_order(oa, n_buckets):
     return order, offsets
 
 
-def sort_buckets(order, offsets, key):
+def sort_buckets(order: np.ndarray, offsets: np.ndarray, key: np.ndarray) -> None:
     """Sort each bucket ``order[offsets[b]:offsets[b+1]]`` by ``key``, stably (in place)."""
     bucket = np.repeat(np.arange(offsets.shape[0] - 1), np.diff(offsets))
     order[:] = order[np.lexsort((key[order], bucket))]
 
 
 def merge_groups(
-    order, starts, reward, use_max, owner, action, t, p, group, red, g_owner, g_action, g_t, g_p
-):
+    order: np.ndarray,
+    starts: np.ndarray,
+    reward: np.ndarray,
+    use_max: bool,
+    owner: np.ndarray,
+    action: np.ndarray,
+    t: np.ndarray,
+    p: np.ndarray,
+    group: np.ndarray,
+    red: np.ndarray,
+    g_owner: np.ndarray,
+    g_action: np.ndarray,
+    g_t: np.ndarray,
+    g_p: np.ndarray,
+) -> None:
     """Per group (rows ``order[starts[g]:starts[g+1]]``): the extreme reward, the group id
     of each row and the group's representative row (its first)."""
     n_groups = starts.shape[0] - 1
@@ -316,7 +453,13 @@ def merge_groups(
     sizes = np.diff(starts)
     group[order] = np.repeat(np.arange(n_groups), sizes)
     reduce = np.maximum if use_max else np.minimum
-    red[:] = reduce.reduceat(reward[order], starts[:-1])
+    vals = reward[order]
+    extreme = reduce.reduceat(vals, starts[:-1])
+    # the first row attaining it (-0.0 and 0.0 tie: the first's sign, as the C kernel
+    # keeps; numpy's maximum may return either)
+    hit = vals == np.repeat(extreme, sizes)
+    n = vals.shape[0]
+    red[:] = vals[np.minimum.reduceat(np.where(hit, np.arange(n), n), starts[:-1])]
     first = order[starts[:-1]]
     g_owner[:] = owner[first]
     g_action[:] = action[first]

@@ -5,14 +5,17 @@ are found first) and those shipped in the package (``lpbounds/models``). For eac
 name, kind, states, actions, (state, action) pairs, discount, number of partition sets,
 source, what it needs beyond lpbounds (``gymnasium``) and its path. Sizes are read from
 the parameters where the kind allows it (the patrol files by eq. 27-28, the garnets,
-the shelf's models), so listing never enumerates a large model; a Gymnasium model is
-read from Gymnasium when it is installed (its sizes are shown as ``-`` otherwise).
-``--json`` prints the same list for machines.
+the shelf's models), so listing never enumerates a large model. A Gymnasium model's sizes
+are Gymnasium's: they are read from it when the model is named (``lpbounds models
+frozenlake``) and Gymnasium is installed, and shown as ``-`` in the full listing, which
+imports no optional package (whether one is installed is found with
+:func:`importlib.util.find_spec`). ``--json`` prints the same list for machines.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import math
 import sys
@@ -142,18 +145,25 @@ def _built_sizes(entry: ModelEntry, inst: Any) -> None:
         entry.n_partitions = inst.partition().n_partitions
 
 
-def _shelf_sizes(entry: ModelEntry, inst: Any) -> None:
+def installed(package: str) -> bool:
+    """Whether ``package`` can be imported here (found, not imported)."""
+    return importlib.util.find_spec(package) is not None
+
+
+def _shelf_sizes(entry: ModelEntry, inst: Any, build: bool) -> None:
     from ..errors import SolverNotInstalledError
     from ..model.shelf import SHELF_KINDS, model_sizes, partition_size
 
     entry.needs = list(SHELF_KINDS[inst.kind].needs)
+    entry.installed = all(installed(need) for need in entry.needs)
     sizes = model_sizes(inst.config["model"])
     entry.discount = sizes.discount
-    if sizes.n_states is None:  # read from Gymnasium when it is there
-        try:
-            _built_sizes(entry, inst)
-        except SolverNotInstalledError:
-            entry.installed = False
+    if sizes.n_states is None:  # Gymnasium's: read from it for a model named (``build``)
+        if build and entry.installed:
+            try:
+                _built_sizes(entry, inst)
+            except SolverNotInstalledError:
+                entry.installed = False
         return
     entry.n_states, entry.n_actions, entry.n_pairs = sizes.n_states, sizes.n_actions, sizes.n_pairs
     entry.n_outcomes = sizes.n_outcomes
@@ -161,8 +171,9 @@ def _shelf_sizes(entry: ModelEntry, inst: Any) -> None:
         entry.n_partitions = partition_size(inst.config["partition"], sizes)
 
 
-def _entry(path: Path) -> ModelEntry:
-    """The listing of one instance file (an unreadable file is listed with the reason)."""
+def _entry(path: Path, build: bool = False) -> ModelEntry:
+    """The listing of one instance file (an unreadable file is listed with the reason);
+    ``build``: read the sizes that only building the model gives (a Gymnasium model's)."""
     from ..errors import LPBoundsError
     from ..model.instances import load_instance
     from ..model.shelf import SHELF_KINDS
@@ -180,7 +191,7 @@ def _entry(path: Path) -> ModelEntry:
         elif inst.kind == "garnet":
             _garnet_sizes(entry, inst)
         elif inst.kind in SHELF_KINDS:
-            _shelf_sizes(entry, inst)
+            _shelf_sizes(entry, inst, build)
         else:
             _built_sizes(entry, inst)
     except LPBoundsError as exc:
@@ -200,7 +211,7 @@ def catalogue(names: list[str] | None = None) -> list[ModelEntry]:
     from ..model.instances import resolve_instance_path
 
     if names:
-        return [_entry(resolve_instance_path(name)) for name in names]
+        return [_entry(resolve_instance_path(name), build=True) for name in names]
     return [_entry(path) for path in _model_files()]
 
 
@@ -282,7 +293,8 @@ SIZES_NOTE = (
     "each name is a MODEL of solve, compare, export and verify; outcomes = successors "
     "listed per (state, action) pair; pairs = allowed pairs; sets = "
     "sets of the file's [partition] (for RLP, SLP, IB, ALP); a Gymnasium model's states "
-    "include the absorbing end state it adds; - = not known without building the model"
+    "include the absorbing end state it adds (name the model to read its sizes from "
+    "Gymnasium); - = not known without building the model"
 )
 
 

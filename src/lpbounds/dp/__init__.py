@@ -87,10 +87,9 @@ never built. Its arithmetic is that of the rows, so the results are the same num
 ``tests/test_fast_paths.py`` checks that. Pass the rows (``exact_rows(mdp)``) to force
 the plain path.
 
-Small models (fewer than :data:`lpbounds._kernels.dispatch.SMALL_READS` values read per sweep) run
-on numpy twins of the compiled kernels, with the same arithmetic and the same numbers, so
-a first solve in a fresh environment compiles nothing; larger ones use the compiled
-kernels and say so on the ``lpbounds`` logger when they compile first.
+Every sweep runs C kernels built at install (:mod:`lpbounds._kernels.dispatch`), at every
+size: a first solve in a fresh environment compiles nothing. Their numpy twins, with the
+same arithmetic and the same numbers, are the tests' reference.
 
 One loop
 --------

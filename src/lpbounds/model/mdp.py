@@ -49,12 +49,12 @@ def index_dtype(n: int) -> type[np.signedinteger[Any]]:
 def _check_successors(succ: np.ndarray, allow: np.ndarray, n: int) -> tuple[int, int, int]:
     """Out-of-range successors: (count on allowed pairs, first flat index, count elsewhere).
 
-    Compiled for large models (C, one pass, no temporaries: full-size boolean masks cost
-    GBs at 33 M states), plain numpy for small ones (:mod:`lpbounds._kernels.dispatch`).
+    Compiled (C, one pass, no temporaries: full-size boolean masks cost GBs at 33 M
+    states; :func:`lpbounds._kernels.dispatch.row_sweeps`).
     """
     from .._kernels import dispatch as _backend
 
-    bad, first, bad_disallowed = _backend.row_sweeps(succ.size).check_successors(succ, allow, n)
+    bad, first, bad_disallowed = _backend.row_sweeps().check_successors(succ, allow, n)
     return int(bad), int(first), int(bad_disallowed)
 
 

@@ -6,10 +6,11 @@ vector over states and no exact ``V*`` exist; the partition bounds do (``M = 207
 with respect to the lower bound ``w*`` lifted to states (``V_low(x) = w*(i(x))``, paper
 eq. 30), one state at a time:
 
-* the successors of a state come from the model's own compiled dynamics
-  (``lpbounds.patrol.model.successor_kernel``), their components from its decoder
-  (``decode_kernel``) and their partitions from the compiled key index of
-  :mod:`lpbounds.patrol.partitions` (``alert_key_kernel``, ``key_index_kernel``);
+* the successors of a state come from the model's own dynamics and its decoder
+  (the formulas of ``lpbounds.patrol.model.successor_kernel`` and ``decode_kernel``) and
+  their partitions from the key index of :mod:`lpbounds.patrol.partitions`
+  (``key_index_kernel``), all in C (:mod:`lpbounds._kernels.patrolmc`, built at install;
+  the paths of a start run one range per thread);
 * ``Q(x, u) = R_u(x) + lambda sum_l p_l w*(i(f(x, u, Y_l)))`` is summed in outcome
   order exactly as :func:`lpbounds.dp.greedy_policy` sums it, and the action is chosen
   with its tie rule (every action within
@@ -68,19 +69,20 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
 from scipy import stats
 
 from .._defaults import DEFAULT_SEEDS
+from .._kernels.extensions import patrolmc as _c
+from .._kernels.threads import run_ranges, split_ranges
 from ..dp import solve_exact
 from ..errors import ConsistencyError, ValidationError
 from ..model.mdp import FiniteMDP
 from ..tolerances import GREEDY_TIE_RTOL, MC_TRUNCATION_TARGET
 from ..validation import check_bool, check_int, check_real, check_vector
 from .bounds import patrol_rows
-from .model import ACTION_NAMES, PatrolModel, decode_kernel, successor_kernel
+from .model import ACTION_NAMES, PatrolModel
 from .params import PatrolParams
-from .partitions import alert_key_kernel, block_sizes, key_index_kernel
+from .partitions import block_sizes
 from .simulation import SimulationResult, alert_sequence, pooled_statistics, simulate
 from .summary import PolicyStatistics
 
@@ -144,7 +146,10 @@ def partition_bounds(params: PatrolParams) -> PartitionBounds:
 # ---------------------------------------------------------------------- compiled steps
 @dataclass(frozen=True)
 class _Kernel:
-    """The model's constants in the form the compiled kernels take."""
+    """The model's constants in the form the compiled kernels take (C,
+    :mod:`lpbounds._kernels.patrolmc`: a greedy step decodes the state, forms each
+    allowed action's successors and their partitions, and sums ``p_l w*(i(x'))`` in outcome
+    order; it checks these tables exactly against their definition at every call)."""
 
     cfg: np.ndarray  # n_nodes, big_d, gamma, radix, n_travel, tb_size, lb_size, allow_empty
     station_pos: np.ndarray
@@ -190,170 +195,14 @@ class _Kernel:
         )
 
 
-@njit(cache=True, nogil=True)
-def _buffers(m):  # pragma: no cover - compiled
-    """Per-trajectory work arrays: the state ``cur`` (l, w, d) and ``tau`` (1, m); per
-    action ``a`` the successor indices ``succ[a, 0]`` (by outcome), the components of the
-    no-alert successor ``nl[a], nw[a], nd[a], ntau[a, 0]``, the Q-values ``q``, the
-    successors' values ``wn[a, y]`` and their expectation ``ev[a]``."""
-    cur = np.zeros(3, np.int64)
-    tau = np.zeros((1, m), np.int16)
-    succ = np.zeros((3, 1, m + 1), np.int64)
-    nl = np.zeros(3, np.int64)
-    nw = np.zeros(3, np.int64)
-    nd = np.zeros(3, np.int64)
-    ntau = np.zeros((3, 1, m), np.int16)
-    q = np.zeros(3)
-    wn = np.zeros((3, m + 1))
-    ev = np.zeros(3)
-    return cur, tau, succ, nl, nw, nd, ntau, q, wn, ev
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _decode_one(x, a, mt, buf):  # pragma: no cover - compiled
-    """Decode state ``x`` into action ``a``'s successor slots (the model's decoder); it
-    becomes ``succ[a, 0, 0]``."""
-    cfg, stations = mt[0], mt[2]
-    tau, succ, nl, nw, nd, ntau = buf[1], buf[2], buf[3], buf[4], buf[5], buf[6]
-    succ[a, 0, 0] = x
-    decode_kernel(
-        succ[a, 0, :1], cfg[4], cfg[3], tau.shape[1], cfg[1], stations, nl[a : a + 1],
-        nw[a : a + 1], nd[a : a + 1], ntau[a],
-    )  # fmt: skip
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _set_state(x, mt, buf):  # pragma: no cover - compiled
-    """Make state ``x`` the current state of ``buf`` (action 0's slots as scratch)."""
-    _decode_one(x, 0, mt, buf)
-    _advance(0, -1, buf)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _q_value(a, lower, mt, buf):  # pragma: no cover - compiled
-    """``lambda sum_l p_l lower[i(f(x, a, Y_l))]`` summed in outcome order, as
-    :func:`lpbounds.dp.greedy_policy` sums it; fills the action's successor slots.
-
-    Only the no-alert successor is decoded: by the model's encoding
-    (``successor_kernel``), the successor under outcome ``y >= 1`` has another index
-    exactly when the alert at station ``y - 1`` is new (``tau' = 1``, so ``A' = 1`` and
-    ``taubar' = max(taubar, 1)``), and is the no-alert successor otherwise.
-    """
-    cfg, station_pos, w_travel, w_loiter, probs = mt[0], mt[1], mt[3], mt[4], mt[5]
-    cur, tau, succ, nl, nw, nd, ntau, _, wn, ev = buf
-    m = tau.shape[1]
-    n_nodes, big_d, gamma, radix, n_travel = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4]
-    successor_kernel(
-        cur[0:1], cur[1:2], cur[2:3], tau, a, n_nodes, big_d, gamma, radix, n_travel,
-        station_pos, w_travel, w_loiter, succ[a],
-    )  # fmt: skip
-    _decode_one(succ[a, 0, 0], a, mt, buf)
-    acode, tb = alert_key_kernel(ntau[a, 0])
-    acc = 0.0
-    for y in range(m + 1):
-        ay, tby = acode, tb
-        if y > 0 and succ[a, 0, y] != succ[a, 0, 0]:
-            ay, tby = acode | (1 << (m - y)), max(tb, 1)
-        part = key_index_kernel(
-            nl[a], nw[a], nd[a], ay, tby, station_pos, n_nodes, big_d, gamma, cfg[5], cfg[6], m
-        )
-        wn[a, y] = lower[part]
-        acc += probs[y] * wn[a, y]
-    ev[a] = acc
-    return mt[8] * acc
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _greedy_step(lower, mt, buf):  # pragma: no cover - compiled
-    """The greedy action at ``buf``'s current state and its reward ``R_u(x)``; fills the
-    successor slots of every allowed action."""
-    cfg, station_pos, inc, rho, tie_rtol = mt[0], mt[1], mt[6], mt[7], mt[9]
-    cur, tau = buf[0], buf[1]
-    l, d, big_d, gamma = cur[0], cur[2], cfg[1], cfg[2]
-    k = station_pos[l]
-    tbar = alert_key_kernel(tau[0])[1]
-    pen = -rho * float(min(tbar, gamma))
-    n_act = 2
-    if k >= 0 and d < big_d and (d >= 1 or tau[0, k] > 0 or cfg[7] != 0):
-        n_act = 3
-    q = buf[7]
-    best = -np.inf
-    for a in range(n_act):
-        r = pen + inc[d] if a == 2 else pen
-        q[a] = r + _q_value(a, lower, mt, buf)
-        best = max(best, q[a])
-    thr = best - tie_rtol * max(1.0, abs(best))
-    best_a = 0
-    for a in range(n_act - 1, -1, -1):
-        if q[a] >= thr:
-            best_a = a
-    return best_a, (pen + inc[d] if best_a == 2 else pen)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _advance(a, y, buf):  # pragma: no cover - compiled
-    """Move to the successor of action ``a`` under outcome ``y`` (``y = -1``: the decoded
-    state itself); return its index."""
-    cur, tau, succ, nl, nw, nd, ntau = buf[0], buf[1], buf[2], buf[3], buf[4], buf[5], buf[6]
-    cur[0], cur[1], cur[2] = nl[a], nw[a], nd[a]
-    tau[0, :] = ntau[a, 0, :]
-    if y < 0:
-        return -1
-    if y > 0 and succ[a, 0, y] != succ[a, 0, 0]:
-        tau[0, y - 1] = 1
-    return succ[a, 0, y]
-
-
-@njit(cache=True, nogil=True)
-def _actions_kernel(xs, lower, mt, out):  # pragma: no cover - compiled
-    """``out[i]``: the greedy action at state ``xs[i]``."""
-    buf = _buffers(mt[3].shape[0])
-    for i in range(xs.shape[0]):
-        _set_state(xs[i], mt, buf)
-        out[i] = _greedy_step(lower, mt, buf)[0]
-
-
-@njit(cache=True, nogil=True)
-def _path_return(x0, outcomes, lower, mt, cv):  # pragma: no cover - compiled
-    """The discounted return of one path from ``x0`` under ``outcomes`` (its own work
-    arrays: a separate function, so the parallel loop cannot hoist and share them)."""
-    discount = mt[8]
-    buf = _buffers(mt[3].shape[0])
-    wn, ev = buf[8], buf[9]
-    _set_state(x0, mt, buf)
-    g = 0.0
-    disc = 1.0
-    for t in range(outcomes.shape[0]):
-        a, r = _greedy_step(lower, mt, buf)
-        y = outcomes[t]
-        g += disc * r
-        if cv:
-            g -= disc * discount * (wn[a, y] - ev[a])
-        disc *= discount
-        _advance(a, y, buf)
-    return g
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def _returns_kernel(x0, outcomes, lower, mt, cv, out):  # pragma: no cover - compiled
+def _returns(
+    x0: int, outcomes: np.ndarray, lower: np.ndarray, kernel: _Kernel, cv: bool, out: np.ndarray
+) -> None:
     """``out[p]``: the discounted return of path ``p`` from ``x0`` under ``outcomes[p]``,
-    minus (``cv``) the control variate ``sum_t lambda^(t+1) (w(x_(t+1)) - E_t w(x_(t+1)))``."""
-    for p in prange(outcomes.shape[0]):
-        out[p] = _path_return(x0, outcomes[p], lower, mt, cv)
-
-
-@njit(cache=True, nogil=True)
-def _trajectory_kernel(x0, outcomes, lower, mt, states, actions):  # pragma: no cover - compiled
-    """One trajectory: ``states[t]`` (``t = 0..T``) and ``actions[t]`` (``t < T``)."""
-    buf = _buffers(mt[3].shape[0])
-    _set_state(x0, mt, buf)
-    x = x0
-    for t in range(outcomes.shape[0]):
-        states[t] = x
-        a = _greedy_step(lower, mt, buf)[0]
-        actions[t] = a
-        x = _advance(a, outcomes[t], buf)
-    states[outcomes.shape[0]] = x
+    minus (``cv``) the control variate ``sum_t lambda^(t+1) (w(x_(t+1)) - E_t w(x_(t+1)))``
+    (C, one range of paths per thread; each path its own work arrays)."""
+    args = (int(x0), outcomes, lower, kernel.args(), bool(cv), out)
+    run_ranges(_c.greedy_returns, args, split_ranges(outcomes.shape[0]))
 
 
 # ---------------------------------------------------------------------- inputs
@@ -458,7 +307,7 @@ def greedy_actions(params: PatrolParams, lower: Any, states: Any) -> np.ndarray:
     xs = _states(params, states, "states")
     out = np.empty(xs.size, dtype=np.int8)
     k = _Kernel.of(params)
-    _actions_kernel(xs, v, k.args(), out)
+    run_ranges(_c.greedy_actions, (xs, v, k.args(), out), split_ranges(xs.size))
     return out
 
 
@@ -497,7 +346,7 @@ class GreedyValueEstimate:
         Whether the returns had the control variate subtracted (``std`` is then the
         standard deviation of the corrected returns).
     seconds : float
-        Wall time of the simulation (compiled kernels; the first call also compiles).
+        Wall time of the simulation (the C kernels, one range of paths per thread).
     """
 
     starts: np.ndarray
@@ -676,7 +525,7 @@ def greedy_value_mc(
     for i, x in enumerate(xs):
         sub = int(np.random.SeedSequence([seed, i]).generate_state(1)[0])
         y = alert_sequence(paths * horizon, p0, params.m, sub).reshape(paths, horizon)
-        _returns_kernel(int(x), y, lo, k.args(), control_variate, returns[i])
+        _returns(int(x), y, lo, k, control_variate, returns[i])
     seconds = time.perf_counter() - t0
     parts = PatrolModel(params).state_partition(xs)
     return GreedyValueEstimate(
@@ -812,7 +661,7 @@ def _greedy_run(
     states = np.empty(y.size + 1, dtype=np.int64)
     actions = np.empty(y.size, dtype=np.int64)
     k = _Kernel.of(params)
-    _trajectory_kernel(x0, y, lo, k.args(), states, actions)
+    _c.greedy_trajectory(x0, y, lo, k.args(), states, actions)
     model, policy, comps, x_local = _visited_chain(params, states, actions, y)
     res = simulate(model, policy, y, start=x_local, policy_name="pi_s", seed=seed, components=comps)
     if res.mismatches:

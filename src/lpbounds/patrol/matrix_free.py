@@ -49,6 +49,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._kernels.threads import get_threads
 from ..dp import DPResult, PolicyEvaluation, check_eval_sweeps, evaluation_loop, mpi_loop
 from ..errors import ConvergenceError, ValidationError
 from ..rows import PolicySweeps
@@ -86,8 +87,9 @@ class MatrixFreePatrol:
     Notes
     -----
     The state encoding, the dynamics and the partitions are those of
-    :class:`~lpbounds.patrol.model.PatrolModel`; the sweeps run in parallel over chunks
-    of consecutive rows (numba ``prange``).
+    :class:`~lpbounds.patrol.model.PatrolModel`; the sweeps (C,
+    :mod:`lpbounds._kernels.patrolsweeps`) run in parallel over chunks of consecutive rows,
+    one range of chunks per thread (:mod:`lpbounds._kernels.threads`).
     """
 
     def __init__(self, params: PatrolParams | None = None) -> None:
@@ -97,7 +99,7 @@ class MatrixFreePatrol:
         self.model = pm
         self.n_vars = int(p.n_states)
         self.discount = float(p.discount)
-        self.geometry: tuple[np.ndarray, ...] = sw.geometry(p)
+        self.geometry: sw.Geometry = sw.geometry(p)
         self._reward_absmax: float | None = None
 
     def __repr__(self) -> str:
@@ -125,16 +127,20 @@ class MatrixFreePatrol:
 
     @staticmethod
     def nchunks() -> int:
-        """Work chunks per sweep (a few per numba thread)."""
-        from .._kernels.dispatch import nchunks
+        """Work chunks per sweep: eight per thread, for load balance. The per-chunk
+        statistics of :meth:`greedy_gap` and :meth:`vsub_stats` (sums) depend on it, the
+        sweeps' numbers do not."""
+        return 8 * get_threads()
 
-        return nchunks()
-
-    def _walk(self) -> tuple[np.ndarray, ...]:
+    def _walk(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The kernels' first arguments: the plane geometry (sizes, planes, stations, weights)."""
         return self.geometry[:4]
 
-    def _dynamics(self) -> tuple[Any, ...]:
+    def _dynamics(
+        self,
+    ) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float
+    ]:
         """The sweeps' first arguments: the geometry, then probabilities, rewards, discount."""
         return (*self.geometry, self.discount)
 

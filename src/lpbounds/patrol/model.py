@@ -35,9 +35,10 @@ from __future__ import annotations
 from functools import cached_property
 from typing import Any
 
-import numba
 import numpy as np
 
+from .._kernels.extensions import patrolsweeps as _c
+from .._kernels.threads import run_ranges, split_ranges
 from ..errors import ValidationError
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
@@ -55,13 +56,16 @@ ACTION_U: tuple[int, int, int] = (1, -1, 0)
 _TAU = np.int16  # delays fit: Gamma <= params.GAMMA_MAX
 
 
-@numba.njit(cache=True)
-def decode_kernel(x, n_travel, radix, m, n_big_d, stations, l, w, d, tau):  # pragma: no cover
-    """Decode state indices ``x`` into their components, in place (compiled).
+def decode_kernel(
+    x: np.ndarray, n_travel: int, radix: int, m: int, n_big_d: int, stations: np.ndarray,
+    l: np.ndarray, w: np.ndarray, d: np.ndarray, tau: np.ndarray,
+) -> None:  # fmt: skip
+    """Decode state indices ``x`` into their components, in place (compiled: C, one range of
+    states per thread).
 
-    The model's encoding, shared with the matrix-free sweeps
-    (:mod:`lpbounds.patrol.matrix_free`) and the greedy simulation
-    (:mod:`lpbounds.patrol.greedy_mc`), which decode states without building the model.
+    The model's encoding; the matrix-free sweeps (:mod:`lpbounds.patrol.sweeps`) and the
+    greedy simulation (:mod:`lpbounds.patrol.greedy_mc`) decode states with the same
+    formulas in their own C (``patrol.h``).
 
     Parameters
     ----------
@@ -76,68 +80,38 @@ def decode_kernel(x, n_travel, radix, m, n_big_d, stations, l, w, d, tau):  # pr
     n_big_d : int
         ``D``, the largest dwell.
     stations : numpy.ndarray
-        Node of each station.
+        Node of each station (int64).
     l, w, d : numpy.ndarray
-        Outputs, one entry per state: location, heading (+1 / -1), dwell.
+        Outputs (int64), one entry per state: location, heading (+1 / -1), dwell.
     tau : numpy.ndarray
-        Output, shape ``(x.size, m)``: the delays.
+        Output (int16), shape ``(x.size, m)``: the delays.
+
+    Raises
+    ------
+    ValueError
+        An entry of ``x`` is not a state of the encoding (named).
     """
-    rm = radix**m
-    rm1 = radix ** (m - 1)
-    for i in range(x.size):
-        xi = x[i]
-        if xi < n_travel:
-            lw = xi // rm
-            code = xi - lw * rm
-            l[i] = lw // 2
-            w[i] = 1 - 2 * (lw % 2)
-            d[i] = 0
-            for j in range(m - 1, -1, -1):
-                tau[i, j] = code % radix
-                code //= radix
-        else:
-            y = xi - n_travel
-            kd = y // rm1
-            code = y - kd * rm1
-            k = kd // n_big_d
-            d[i] = kd % n_big_d + 1
-            l[i] = stations[k]
-            w[i] = 1
-            tau[i, k] = 0
-            for q in range(m - 2, -1, -1):
-                j = q + 1 if q >= k else q
-                tau[i, j] = code % radix
-                code //= radix
+    args = (x, int(n_travel), int(radix), int(m), int(n_big_d), stations, l, w, d, tau)
+    run_ranges(_c.decode_states, args, split_ranges(x.shape[0]))
 
 
-@numba.njit(cache=True)
 def successor_kernel(
-    l,
-    w,
-    d,
-    tau,
-    action,
-    n_nodes,
-    n_big_d,
-    gamma,
-    radix,
-    n_travel,
-    station_pos,
-    w_travel,
-    w_loiter,
-    out,
-):  # pragma: no cover
-    """Successor indices of decoded states under one action, into ``out`` (compiled).
+    l: np.ndarray, w: np.ndarray, d: np.ndarray, tau: np.ndarray, action: int, n_nodes: int,
+    n_big_d: int, gamma: int, radix: int, n_travel: int, station_pos: np.ndarray,
+    w_travel: np.ndarray, w_loiter: np.ndarray, out: np.ndarray,
+) -> None:  # fmt: skip
+    """Successor indices of decoded states under one action, into ``out`` (compiled: C,
+    one range of states per thread).
 
-    The model's dynamics, shared with :mod:`lpbounds.patrol.matrix_free` and
-    :mod:`lpbounds.patrol.greedy_mc`. Row ``i`` of ``out`` (shape ``(l.size, m + 1)``)
+    The model's dynamics (the same formulas as the C of :mod:`lpbounds.patrol.sweeps` and
+    :mod:`lpbounds.patrol.greedy_mc`). Row ``i`` of ``out`` (shape ``(l.size, m + 1)``)
     holds the successor with no new alert (column 0) and with an alert at station ``j``
     (column ``j + 1``).
 
     Parameters
     ----------
     l, w, d, tau : numpy.ndarray
-        Decoded states (:func:`decode_kernel`).
+        Decoded states (:func:`decode_kernel`: int64, ``tau`` int16).
     action : int
         Action index (0 continue, 1 reverse, 2 loiter).
     n_nodes, n_big_d, gamma, radix, n_travel : int
@@ -148,40 +122,17 @@ def successor_kernel(
         Index weights of the delays in travelling and loitering states.
     out : numpy.ndarray
         Output, int64.
+
+    Raises
+    ------
+    ValueError
+        A state whose ``l`` is not a node, or (loiter) not a station with ``d < D`` (named).
     """
-    m = tau.shape[1]
-    rm = radix**m
-    rm1 = radix ** (m - 1)
-    for i in range(l.size):
-        li = l[i]
-        if action == 2:
-            k = station_pos[li]
-            idx0 = n_travel + (k * n_big_d + d[i]) * rm1
-            for j in range(m):
-                t = tau[i, j]
-                if j != k and t > 0:
-                    idx0 += min(t + 1, gamma) * w_loiter[k, j]
-            out[i, 0] = idx0
-            for j in range(m):
-                if j != k and tau[i, j] == 0:
-                    out[i, j + 1] = idx0 + w_loiter[k, j]
-                else:
-                    out[i, j + 1] = idx0
-        else:
-            u = 1 if action == 0 else -1
-            w2 = w[i] * u
-            l2 = (li + w2) % n_nodes
-            idx0 = (2 * l2 + (1 if w2 < 0 else 0)) * rm
-            for j in range(m):
-                t = tau[i, j]
-                if t > 0:
-                    idx0 += min(t + 1, gamma) * w_travel[j]
-            out[i, 0] = idx0
-            for j in range(m):
-                if tau[i, j] == 0:
-                    out[i, j + 1] = idx0 + w_travel[j]
-                else:
-                    out[i, j + 1] = idx0
+    args = (
+        l, w, d, tau, int(action), int(n_nodes), int(n_big_d), int(gamma), int(radix),
+        int(n_travel), station_pos, w_travel, w_loiter, out,
+    )  # fmt: skip
+    run_ranges(_c.successor_states, args, split_ranges(l.shape[0]))
 
 
 class PatrolModel:

@@ -21,8 +21,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 
+from .._kernels.extensions import patrolsweeps as _c
 from ..errors import ValidationError
 from .params import PatrolParams
 
@@ -95,49 +95,49 @@ def partition_index(
     return np.where(travel, idx_t, idx_l)
 
 
-@njit(cache=True, nogil=True)
 def key_index_kernel(
-    l, w, d, acode, tb, station_pos, n_nodes, big_d, gamma, tb_size, lb_size, m
-):  # pragma: no cover - compiled
-    """:func:`partition_index` of one key, compiled (scalar): ``acode`` is the alert
-    pattern ``A`` as a binary number (``A_1`` the most significant of ``m`` bits),
-    ``tb`` the maximum delay; ``tb_size, lb_size`` are :func:`block_sizes`."""
-    if d == 0:
-        within = 0 if acode == 0 else 1 + (acode - 1) * gamma + (tb - 1)
-        return (2 * l + (1 if w < 0 else 0)) * tb_size + within
-    k = station_pos[l]
-    low = acode & ((1 << (m - 1 - k)) - 1)
-    high = acode >> (m - k)
-    acode_l = (high << (m - 1 - k)) | low
-    within = 0 if acode_l == 0 else 1 + (acode_l - 1) * gamma + (tb - 1)
-    return 2 * n_nodes * tb_size + (k * big_d + d - 1) * lb_size + within
+    l: int, w: int, d: int, acode: int, tb: int, station_pos: np.ndarray, n_nodes: int,
+    big_d: int, gamma: int, tb_size: int, lb_size: int, m: int,
+) -> int:  # fmt: skip
+    """:func:`partition_index` of one key, compiled (scalar; the C of the matrix-free
+    sweeps and the greedy policy, ``patrol.h``): ``acode`` is the alert pattern ``A`` as a
+    binary number (``A_1`` the most significant of ``m`` bits), ``tb`` the maximum delay;
+    ``tb_size, lb_size`` are :func:`block_sizes`. A ValueError for ``l`` outside the nodes
+    or a loiter key (``d >= 1``) away from a station."""
+    return int(
+        _c.key_index(
+            int(l), int(w), int(d), int(acode), int(tb), _i8(station_pos), int(n_nodes),
+            int(big_d), int(gamma), int(tb_size), int(lb_size), int(m),
+        )
+    )  # fmt: skip
 
 
-@njit(cache=True, nogil=True)
-def alert_key_kernel(tau):  # pragma: no cover - compiled
+def alert_key_kernel(tau: np.ndarray) -> tuple[int, int]:
     """``(acode, taubar)`` of one delay vector: the key's alert pattern and maximum delay."""
-    acode = 0
-    tb = 0
-    for j in range(tau.shape[0]):
-        acode = 2 * acode + (1 if tau[j] > 0 else 0)
-        tb = max(tb, tau[j])
-    return acode, tb
+    acode, tb = _c.alert_key(np.ascontiguousarray(tau))
+    return int(acode), int(tb)
 
 
-@njit(cache=True, nogil=True)
 def state_partition_kernel(
-    l, w, d, tau, station_pos, n_nodes, big_d, gamma, tb_size, lb_size
-):  # pragma: no cover - compiled
+    l: int, w: int, d: int, tau: np.ndarray, station_pos: np.ndarray, n_nodes: int,
+    big_d: int, gamma: int, tb_size: int, lb_size: int,
+) -> int:  # fmt: skip
     """:func:`partition_index` of one state given by its components, compiled (scalar).
 
-    ``tau`` is the state's delay vector (length m). For the matrix-free kernels that act
-    states out one at a time; tested equal to :func:`partition_index` on every state of
+    ``tau`` is the state's delay vector (length m). The key index of the C kernels that
+    act states out one at a time; tested equal to :func:`partition_index` on every state of
     small instances (tests/patrol/test_greedy_mc.py).
     """
-    acode, tb = alert_key_kernel(tau)
-    return key_index_kernel(
-        l, w, d, acode, tb, station_pos, n_nodes, big_d, gamma, tb_size, lb_size, tau.shape[0]
-    )
+    return int(
+        _c.state_partition(
+            int(l), int(w), int(d), np.ascontiguousarray(tau), _i8(station_pos), int(n_nodes),
+            int(big_d), int(gamma), int(tb_size), int(lb_size),
+        )
+    )  # fmt: skip
+
+
+def _i8(a: Any) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.int64)
 
 
 def _check_keys(

@@ -47,8 +47,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 
+from .._kernels.extensions import patrolmc as _c
 from ..errors import ValidationError
 
 __all__ = [
@@ -127,134 +127,30 @@ def spec_step(
 
 
 # ---------------------------------------------------------------------- the kernel
-@njit(cache=True, nogil=True)
-def _simulate_kernel(  # pragma: no cover - compiled
-    x0, policy, successors, comps, stations, N, Gamma, outcomes, check
-):
-    n_steps = outcomes.shape[0]
-    m = stations.shape[0]
-    cap = n_steps + 1
-    r_station = np.empty(cap, np.int64)
-    r_arrival = np.empty(cap, np.int64)
-    r_start = np.empty(cap, np.int64)
-    r_visit = np.empty(cap, np.int64)
-    r_loiters = np.zeros(cap, np.int64)
-    r_done = np.zeros(cap, np.bool_)
-    r_merged = np.zeros(cap, np.int64)
-    r_merged_delay = np.zeros(cap, np.int64)
-    pend = np.zeros(m, np.bool_)
-    arr = np.zeros(m, np.int64)
-    visit = np.full(m, -1, np.int64)
-    mcount = np.zeros(m, np.int64)
-    msum = np.zeros(m, np.int64)  # sum of merged alerts' arrival times
-    counts = np.zeros(8, np.int64)
-    # counts: 0 arrivals, 1 merged, 2 absorbed, 3 loiter steps, 4 mismatches,
-    #         5 first mismatch step, 6 empty loiter steps, 7 unused
-    counts[5] = -1
-    n_rec = 0
-    run = -1
-    x = x0
-    nxt = np.empty(comps.shape[1], np.int64)
-    for t in range(n_steps):
-        l = comps[x, 0]
-        w = comps[x, 1]
-        d = comps[x, 2]
-        a = policy[x]
-        y = outcomes[t]
-        jl = -1
-        for j in range(m):
-            if stations[j] == l:
-                jl = j
-        # first visit of the station with a pending alert
-        if jl >= 0 and pend[jl] and visit[jl] < 0:
-            visit[jl] = t
-        if a == 2:
-            counts[3] += 1
-            if d == 0 and jl >= 0 and pend[jl]:
-                r_station[n_rec] = jl
-                r_arrival[n_rec] = arr[jl]
-                r_start[n_rec] = t
-                r_visit[n_rec] = visit[jl]
-                r_merged[n_rec] = mcount[jl]
-                r_merged_delay[n_rec] = mcount[jl] * t - msum[jl]
-                run = n_rec
-                n_rec += 1
-                pend[jl] = False
-                mcount[jl] = 0
-                msum[jl] = 0
-            if run >= 0:
-                r_loiters[run] += 1
-            else:
-                counts[6] += 1
-        else:
-            if run >= 0:
-                r_done[run] = True
-            run = -1
-        if y > 0:
-            j = y - 1
-            counts[0] += 1
-            if a == 2 and jl == j:
-                counts[2] += 1
-            elif pend[j]:
-                counts[1] += 1
-                mcount[j] += 1
-                msum[j] += t
-            else:
-                pend[j] = True
-                arr[j] = t
-                visit[j] = -1
-        xn = successors[x, a, y]
-        if check:
-            # the spec's f on components, independently of the model's table
-            u = 1 if a == 0 else (-1 if a == 1 else 0)
-            if u != 0:
-                nxt[0] = (l + w * u) % N
-                nxt[1] = w * u
-                nxt[2] = 0
-            else:
-                nxt[0] = l
-                nxt[1] = 1
-                nxt[2] = d + 1
-            for j in range(m):
-                tj = comps[x, 3 + j]
-                if u == 0 and j == jl:
-                    v = 0
-                elif tj > 0:
-                    v = min(tj + 1, Gamma)
-                elif y == j + 1:
-                    v = 1
-                else:
-                    v = 0
-                nxt[3 + j] = v
-                # the pending bookkeeping must agree with the model's delays
-                if pend[j] != (v > 0) or (pend[j] and v != min(t + 1 - arr[j], Gamma)):
-                    nxt[3 + j] = -1
-            bad = False
-            for k in range(comps.shape[1]):
-                if comps[xn, k] != nxt[k]:
-                    bad = True
-            if bad:
-                counts[4] += 1
-                if counts[5] < 0:
-                    counts[5] = t
-        x = xn
-    n_unserviced = 0
-    for j in range(m):
-        if pend[j]:
-            n_unserviced += 1
-    return (
-        r_station[:n_rec].copy(),
-        r_arrival[:n_rec].copy(),
-        r_start[:n_rec].copy(),
-        r_visit[:n_rec].copy(),
-        r_loiters[:n_rec].copy(),
-        r_done[:n_rec].copy(),
-        r_merged[:n_rec].copy(),
-        r_merged_delay[:n_rec].copy(),
-        counts,
-        n_unserviced,
-        x,
-    )
+#: counts of the simulator (``patrolmc.c``): arrivals, merged, absorbed, loiter steps,
+#: mismatches, first mismatch step, empty loiter steps, unused
+_COUNTS = 8
+
+
+def _simulate_kernel(
+    x0: int, policy: np.ndarray, successors: np.ndarray, comps: np.ndarray,
+    stations: np.ndarray, N: int, Gamma: int, outcomes: np.ndarray, check: bool,
+) -> tuple[Any, ...]:  # fmt: skip
+    """One trajectory, compiled (C, :mod:`lpbounds._kernels.patrolmc`): the per-alert
+    records (station, arrival, start, first visit, loiters, complete, merged, merged delay
+    sum), the counts, the unserviced alerts and the final state. The simulator checks
+    every index it reads (a ValueError names the step, never a wild read)."""
+    cap = outcomes.shape[0] + 1
+    records = [np.empty(cap, np.int64) for _ in range(4)]
+    records += [np.zeros(cap, np.int64), np.zeros(cap, np.bool_)]
+    records += [np.zeros(cap, np.int64), np.zeros(cap, np.int64)]
+    counts = np.empty(_COUNTS, np.int64)
+    st, arr, start, visit, loiters, done, merged, merged_delay = records
+    n_rec, n_unserviced, final = _c.simulate(
+        x0, policy, successors, comps, stations, N, Gamma, outcomes, check,
+        st, arr, start, visit, loiters, done, merged, merged_delay, counts,
+    )  # fmt: skip
+    return (*(r[:n_rec].copy() for r in records), counts, n_unserviced, final)
 
 
 # ---------------------------------------------------------------------- results

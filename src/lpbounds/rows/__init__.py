@@ -62,18 +62,19 @@ patrol partitions satisfy the rule by construction (the allowed actions are a fu
 of the partition key, :mod:`lpbounds.patrol.bounds`). The max-rows of RLP (eq. 9) need
 no such rule: a disallowed pair simply has no row, and every row that exists is implied
 at ``Phi v`` by a Bellman inequality of an allowed pair (Theorem 1).
-The kernels that apply ``T`` and ``G`` are in :mod:`lpbounds._kernels.compiled` (compiled, for large
-systems) and :mod:`lpbounds._kernels.twins` (their numpy twins, same numbers, for small ones);
-:mod:`lpbounds._kernels.dispatch` picks one by size.
+The kernels that apply ``T`` and ``G`` are C (:mod:`lpbounds._kernels.native`,
+:mod:`lpbounds._kernels.ckernels`, named by :mod:`lpbounds._kernels.dispatch`); their numpy
+twins (:mod:`lpbounds._kernels.twins`, the same numbers) are the tests' reference.
 
 **The sweep protocol.** The exact-DP loops of :mod:`lpbounds.dp` (MPI, value iteration,
 iterative policy evaluation) run on any :class:`SweepOperator`: :class:`BellmanRows`,
 :class:`PostDecisionRows` and the matrix-free patrol operator
 (:class:`lpbounds.patrol.matrix_free.MatrixFreePatrol`) implement it. A sweep writes
 ``T v`` (or ``T_pi v``) into ``out`` and returns the extremes of ``out - v``; the work
-chunks of the numba kernels are the operator's choice unless ``nchunks`` is given (the C
-row sweeps of :class:`BellmanRows` take one range per thread and ignore it; neither
-changes a number: every state's value is computed alone and the extremes are exact),
+chunks of the patrol's matrix-free kernels are the operator's choice unless ``nchunks`` is
+given (the C sweeps of :class:`BellmanRows` and :class:`PostDecisionRows` take one range per
+thread and ignore it; neither changes a number: every state's value is computed alone and
+the extremes are exact),
 and ``work`` is the operator's scratch array from :meth:`SweepOperator.new_work`, made once
 per solve and passed to each of its sweeps.
 """
@@ -124,8 +125,9 @@ class SweepOperator(Protocol):
     discount : float
         ``lambda``.
     compiled : bool
-        True when the sweeps run compiled, multithreaded kernels (C or numba); False for the
-        numpy twins, for which no thread count is ever set.
+        True when the sweeps run compiled, multithreaded kernels (C), whose thread count
+        :func:`lpbounds.dp.threads_for` sets; False for an operator whose sweeps have no
+        threads.
     sweep_reads : int
         Values one sweep reads: sweeps below :data:`lpbounds.dp.SERIAL_SWEEP_READS` run
         on one thread (:func:`lpbounds.dp.threads_for`).
@@ -403,16 +405,15 @@ class BellmanRows:
         probs = np.empty((n_rows, n_out), dtype=np.float64)
         oa = np.empty(n_rows, dtype=np.int64)
         key = np.empty(n_rows, dtype=np.uint64)
-        agg = _backend.aggregate_kernels(exact.reads)
-        nchunks = _nchunks() if _backend.is_compiled(exact.reads) else 1
+        agg = _backend.kernels()
         agg.canonical_rows(
             labels, exact.owner, exact.action, exact.targets, exact.probs, mdp.n_actions,
-            owner, targets, probs, oa, key, nchunks,
+            owner, targets, probs, oa, key,
         )  # fmt: skip
         order, offsets = agg.bucket_order(oa, m * mdp.n_actions)
         agg.sort_buckets(order, offsets, key)
         new = np.empty(n_rows, dtype=bool)
-        if agg.mark_groups(order, oa, key, targets, probs.view(np.int64), new, nchunks):
+        if agg.mark_groups(order, oa, key, targets, probs.view(np.int64), new):
             # a 64-bit hash collision between different rows: group exactly instead
             group, _ = _group_rows(owner, exact.action, targets, probs)
             order = np.lexsort((group, exact.action, owner))
@@ -468,14 +469,13 @@ class BellmanRows:
 
     @property
     def reads(self) -> int:
-        """Values a sweep reads, ``R * L``: small systems run on the numpy kernels
-        (:mod:`lpbounds._kernels.dispatch`)."""
+        """Values a sweep reads, ``R * L``."""
         return self.n_rows * self.n_outcomes
 
     @property
     def compiled(self) -> bool:
-        """True when the sweeps use the compiled kernels (see :attr:`reads`)."""
-        return _backend.is_compiled(self.reads)
+        """True: the sweeps are C (:mod:`lpbounds._kernels.dispatch`), at every size."""
+        return True
 
     @property
     def sweep_reads(self) -> int:
@@ -483,20 +483,19 @@ class BellmanRows:
         return self.reads
 
     def kernels(self) -> Any:
-        """The kernel module of this system's size (numpy twins or compiled).
+        """The kernel module of Q-values and the game operator.
 
         Returns
         -------
         module
-            :mod:`lpbounds._kernels.twins` or the compiled kernels, as
-            :func:`lpbounds._kernels.dispatch.sweep_kernels` picks them.
+            :func:`lpbounds._kernels.dispatch.kernels` (C).
         """
-        return _backend.sweep_kernels(self.reads)
+        return _backend.kernels()
 
     def sweeps(self) -> Any:
-        """The sweep module of this system's size: the numpy twins or the native (C) row
-        sweeps, as :func:`lpbounds._kernels.dispatch.row_sweeps` picks them."""
-        return _backend.row_sweeps(self.reads)
+        """The sweep module: :func:`lpbounds._kernels.dispatch.row_sweeps` (the C row
+        sweeps)."""
+        return _backend.row_sweeps()
 
     def __repr__(self) -> str:
         return (
@@ -860,7 +859,7 @@ class PostDecisionRows:
         succ, allowed = mdp.successors, mdp.allowed
         if not _sample_consistent(succ, allowed):
             return None
-        kern = _backend.sweep_kernels(succ.size, "post-decision")
+        kern = _backend.kernels()
         seen = np.zeros(n, dtype=np.bool_)
         kern.ps_mark(succ, allowed, seen)
         post = np.flatnonzero(seen)
@@ -872,8 +871,7 @@ class PostDecisionRows:
         first = np.empty((n, n_act), dtype=idt)
         kern.ps_fill(succ, allowed, post_id, outcomes, first)
         del post_id, post
-        nchunks = max(64, _nchunks()) if _backend.is_compiled(succ.size) else 1
-        if kern.ps_verify(succ, first, outcomes, nchunks) != 0:
+        if kern.ps_verify(succ, first, outcomes) != 0:
             return None
         codes, table = _reward_codes(kern, mdp.rewards, cls.MAX_REWARD_CODES)
         return cls(
@@ -895,14 +893,13 @@ class PostDecisionRows:
 
     @property
     def reads(self) -> int:
-        """Pairs times outcomes, the reads of the plain rows' sweep: the size that picks the
-        kernels (:mod:`lpbounds._kernels.dispatch`), so a model takes the same path either way."""
+        """Pairs times outcomes, the reads of the plain rows' sweep."""
         return int(self.first.size * self.outcomes.shape[1])
 
     @property
     def compiled(self) -> bool:
-        """True when the sweeps use the compiled kernels (see :attr:`reads`)."""
-        return _backend.is_compiled(self.reads)
+        """True: the sweeps are C (:mod:`lpbounds._kernels.dispatch`), at every size."""
+        return True
 
     @property
     def sweep_reads(self) -> int:
@@ -911,31 +908,14 @@ class PostDecisionRows:
         return self.n_post * int(self.outcomes.shape[1]) + int(self.first.size)
 
     def kernels(self) -> Any:
-        """The post-decision kernel module of this system's size (numpy twins or compiled).
+        """The post-decision kernel module.
 
         Returns
         -------
         module
-            As :func:`lpbounds._kernels.dispatch.sweep_kernels` picks it.
+            :func:`lpbounds._kernels.dispatch.kernels` (C).
         """
-        return _backend.sweep_kernels(self.reads, "post-decision")
-
-    def work_chunks(self, nchunks: int | None = None) -> int:
-        """Work chunks for the compiled kernels.
-
-        Parameters
-        ----------
-        nchunks : int, optional
-            Returned as is when given.
-
-        Returns
-        -------
-        int
-            ``nchunks``, else a few per kernel thread (1 for the numpy twins, which ignore it).
-        """
-        if nchunks is not None:
-            return nchunks
-        return _nchunks() if self.compiled else 1
+        return _backend.kernels()
 
     @property
     def reward_absmax(self) -> float:
@@ -975,18 +955,17 @@ class PostDecisionRows:
         nchunks: int | None = None,
     ) -> tuple[float, float]:
         """``out = T v``, the first maximising action in ``arg`` (int8); returns the min and
-        max of ``out - v``. ``work``: a :meth:`new_work` buffer (else one is made)."""
+        max of ``out - v``. ``work``: a :meth:`new_work` buffer (else one is made);
+        ``nchunks`` is unused (the C sweeps take one range of states per thread)."""
         w = self.new_work() if work is None else work
-        nc = self.work_chunks(nchunks)
         kern = self.kernels()
         kern.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
             lo, hi = kern.ps_max_stats_coded(
-                self.first, self.reward_codes, self.reward_table, w, self.discount, v, out,
-                arg, nc,
-            )  # fmt: skip
+                self.first, self.reward_codes, self.reward_table, w, self.discount, v, out, arg
+            )
         else:
-            lo, hi = kern.ps_max_stats(self.first, self.reward, w, self.discount, v, out, arg, nc)
+            lo, hi = kern.ps_max_stats(self.first, self.reward, w, self.discount, v, out, arg)
         return float(lo), float(hi)
 
     def sweep_policy(
@@ -1001,19 +980,18 @@ class PostDecisionRows:
     ) -> tuple[float, float]:
         """One evaluation sweep of the actions ``sel``; returns the min and max of
         ``out - v``. ``reward`` replaces the stored rewards (the table when they are coded:
-        see :meth:`zero_rewards`); ``work`` as in :meth:`sweep_max`."""
+        see :meth:`zero_rewards`); ``work`` and ``nchunks`` as in :meth:`sweep_max`."""
         w = self.new_work() if work is None else work
-        nc = self.work_chunks(nchunks)
         kern = self.kernels()
         kern.ps_expect(self.outcomes, self.probs, v, w)
         if self.reward_codes is not None:
             table = self.reward_table if reward is None else reward
             lo, hi = kern.ps_policy_stats_coded(
-                self.first, self.reward_codes, table, sel, w, self.discount, v, out, nc
+                self.first, self.reward_codes, table, sel, w, self.discount, v, out
             )
         else:
             rew = self.reward if reward is None else reward
-            lo, hi = kern.ps_policy_stats(self.first, rew, sel, w, self.discount, v, out, nc)
+            lo, hi = kern.ps_policy_stats(self.first, rew, sel, w, self.discount, v, out)
         return float(lo), float(hi)
 
     def zero_rewards(self) -> np.ndarray:
@@ -1060,13 +1038,13 @@ def _reward_codes(
     kern: Any, reward: np.ndarray, max_codes: int
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """``(codes, table)`` with ``table[codes] == reward`` bit for bit, or ``(None, None)``;
-    ``kern`` is the kernel module (:mod:`lpbounds._kernels.dispatch`)."""
+    ``kern`` is the kernel module (:func:`lpbounds._kernels.dispatch.kernels`)."""
     if max_codes < 1 or reward.size == 0:
         return None, None
     rew = np.ascontiguousarray(reward, dtype=np.float64)
     codes = np.empty(rew.shape, dtype=np.uint16 if max_codes <= 65_536 else np.uint32)
     table = np.empty(max_codes)
-    count = kern.reward_codes(rew, rew.view(np.int64), max_codes, codes, table)
+    count = kern.reward_codes(rew, max_codes, codes, table)
     if count < 0:
         return None, None
     if count <= 256:
@@ -1105,12 +1083,6 @@ def _check_every_partition_kept(mdp: FiniteMDP, partition: Partition, owner: np.
     )
 
 
-def _nchunks() -> int:
-    """Work chunks of the compiled sweep kernels: a few per thread, for load balance
-    (call it for compiled operations only)."""
-    return _backend.nchunks()
-
-
 def _group_rows(
     owner: np.ndarray, action: np.ndarray, targets: np.ndarray, probs: np.ndarray
 ) -> tuple[np.ndarray, int]:
@@ -1124,7 +1096,7 @@ def _group_rows(
         return np.zeros(0, dtype=np.int64), 0
     pbits = np.ascontiguousarray(probs).view(np.int64)
     h = np.empty(n_rows, dtype=np.uint64)
-    _backend.sweep_kernels(n_rows * targets.shape[1]).hash_rows(owner, action, targets, pbits, h)
+    _backend.kernels().hash_rows(owner, action, targets, pbits, h)
     order = np.argsort(h, kind="stable")
     hs = h[order]
     same = hs[1:] == hs[:-1]

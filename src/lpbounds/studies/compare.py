@@ -937,8 +937,8 @@ class _Collect(logging.Handler):
 def run_task_in_worker(task: Task) -> tuple[list[dict[str, Any]], list[LogLine]]:
     """:func:`run_task` in a worker process, returning its ``lpbounds`` log records (WARNING
     and above) instead of printing them: a worker writing to the terminal itself would
-    write into the parent's progress display, and every worker would repeat a notice (the
-    numba compile notice, once per worker). The parent logs each distinct record once."""
+    write into the parent's progress display, and every worker would repeat a notice (once
+    per worker). The parent logs each distinct record once."""
     logger = logging.getLogger("lpbounds")
     handler = _Collect()
     saved = logger.propagate
@@ -1149,7 +1149,7 @@ def _execute(
         batches = ((run_task(t), []) for t in tasks)  # this process: logged as it happens
     else:
         n = min(int(jobs or os.cpu_count() or 1), len(tasks))
-        # spawn, not fork: forking a process that has run OpenMP code (numba, HiGHS)
+        # spawn, not fork: forking a process that has run OpenMP code (HiGHS)
         # aborts the child ("fork() called from a process already using GNU OpenMP")
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:

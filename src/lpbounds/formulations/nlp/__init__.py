@@ -9,7 +9,26 @@ neither imports ``problem`` (they read the NLP passed to them through its public
 attributes).
 """
 
-from .problem import METHOD_KEYWORDS, NLP, NLPMILP, NLPIteration, NLPResult
-from .stop import StopReason
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..._lazy import attach
+
+if TYPE_CHECKING:  # what type checkers see; at run time see __getattr__
+    from .problem import METHOD_KEYWORDS, NLP, NLPMILP, NLPIteration, NLPResult
+    from .stop import StopReason
+
+#: public name -> the submodule that defines it (imported on first access, PEP 562)
+_LAZY: dict[str, str] = {
+    "METHOD_KEYWORDS": "problem",
+    "NLP": "problem",
+    "NLPMILP": "problem",
+    "NLPIteration": "problem",
+    "NLPResult": "problem",
+    "StopReason": "stop",
+}
 
 __all__ = ["METHOD_KEYWORDS", "NLP", "NLPMILP", "NLPIteration", "NLPResult", "StopReason"]
+
+__getattr__, __dir__ = attach(__name__, _LAZY)
