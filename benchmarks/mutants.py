@@ -2,11 +2,11 @@
 
 Each *mutant* is a named regular-expression replacement inside one named function of one
 source file (so a reader sees exactly what was weakened), applied to a **copy** of the
-tree in a temporary folder (``src``, ``tests``, ``models``, ``pyproject.toml``; the
-working files are never touched). The tests that guard the promise are run on the copy
-twice: in file order (``-p no:randomly``) and in a random order (pytest-randomly, the seed
-printed), both with the derandomized hypothesis profile of ``tests/conftest.py``. A
-baseline run of each test set on the unmutated copy must be green first.
+tree in a temporary folder (the working files are never touched). The tests that guard
+the promise are run on the copy twice: in file order (``-p no:randomly``) and in a random
+order (pytest-randomly, the seed printed), both with the derandomized hypothesis profile
+of ``tests/conftest.py``. A baseline run of each test set on the unmutated copy must be
+green first.
 
 The five weakenings of issue 35 (rows a-e of its table) and the two weak kills it names
 (``no-outward-rounding``, ``beyond-always-holds``) come first; the others show that the
@@ -191,10 +191,12 @@ MUTANTS = (
 # ---------------------------------------------------------------------- the copy
 def make_copy(dest: Path) -> Path:
     """``src`` (with the compiled extension and numba's caches, mtimes kept so that the
-    caches stay valid), ``tests``, ``models`` and ``pyproject.toml`` copied to ``dest``."""
-    for part in ("src", "tests", "models"):
+    caches stay valid) and what the tests read (``tests``, ``models``, ``benchmarks``,
+    ``docs``, ``examples``, ``pyproject.toml``, ``README.md``) copied to ``dest``."""
+    for part in ("src", "tests", "models", "benchmarks", "docs", "examples"):
         shutil.copytree(REPO / part, dest / part, ignore=shutil.ignore_patterns("*.egg-info"))
-    shutil.copy2(REPO / "pyproject.toml", dest / "pyproject.toml")
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy2(REPO / name, dest / name)
     return dest
 
 
@@ -308,8 +310,8 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|")
     for m, ((b1, n1), (b2, n2)) in rows:
         label = f"{m.row}: {m.what}" if m.row else m.what
-        print(f"| {label} | `{m.path.removeprefix('src/')}::{m.function.replace('|', ', ')}` | {b1} of {n1} | "
-              f"{b2} of {n2} |")  # fmt: skip
+        where = f"{m.path.removeprefix('src/')}::{m.function.replace('|', ', ')}"
+        print(f"| {label} | `{where}` | {b1} of {n1} | {b2} of {n2} |")
     weak = [m.name for m, counts in rows if min(b for b, _ in counts) < 3]
     if weak:
         print(f"\nfewer than 3 failing tests: {', '.join(weak)}")
