@@ -323,8 +323,8 @@ def test_nlp_certificate_of_any_point_contains_w_star(case):
 
 # ---------------------------------------------------------------------- LP and NLP results
 def check_result(res, exact, case, what) -> None:
-    """An LP or NLP result's bracket contains the exact optimum, no wider than its point
-    allows; its objective bracket contains ``c'exact`` (exactly)."""
+    """An LP or NLP result's ``lower_values``/``upper_values`` contain the exact optimum
+    (exactly) and are no wider than its point allows."""
     assert res.status.has_point, f"{what}: {res.status}"
     ex.assert_contains(res.lower_values, res.upper_values, exact, what)
     point = np.asarray(res.values, dtype=np.float64)
@@ -409,8 +409,8 @@ def test_dp_brackets_contain_the_exact_values(case):
 
 @pytest.mark.parametrize("case", EDGE_CASES, ids=IDS)
 def test_porteus_bounds_contain_the_exact_values(case):
-    """``lower_paper <= lower <= V_pi <= V* <= upper`` with ``pi`` the bounds' greedy policy,
-    ``V_pi`` and ``V*`` exact, from points near ``V*`` and far from it."""
+    """``lower <= V_pi <= V* <= upper`` and ``lower_paper <= V_pi``, with ``pi`` the bounds'
+    greedy policy and ``V_pi``, ``V*`` exact, from points near ``V*`` and far from it."""
     for k, v in enumerate(points_near(case.vstar, mdp_operator(case), case.reward_absmax, 3)):
         b = lb.porteus_bounds(case.mdp, v)
         v_pi = ex.policy_value(*case.arrays[:3], case.discount, b.policy)
@@ -418,7 +418,6 @@ def test_porteus_bounds_contain_the_exact_values(case):
         ex.assert_contains(b.lower, b.upper, case.vstar, what)
         ex.assert_contains(b.lower, b.upper, v_pi, what)
         ex.assert_contains(b.lower_paper, b.upper, v_pi, what)
-        assert all(ex.fr(a) <= e for a, e in zip(b.lower_paper, v_pi, strict=True))
         limit = ex.width_limit(v, case.vstar, case.kappa, magnitude(case, v), case.n_out)
         ex.assert_not_vacuous(b.lower, b.upper, limit, what)
 
