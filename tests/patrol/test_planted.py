@@ -24,6 +24,7 @@ from lpbounds.patrol.reproduce import (
     build_model,
     check_claims,
     check_general,
+    check_lemma3,
     check_sandwich,
     claim_pairs,
     inequality,
@@ -206,6 +207,20 @@ def test_lemma3_full_mdp_counts_planted(steps):
         lem.pairs_differing
         == lemma3_summary(card, None, built.mdp.action_names, 10).pairs_differing
     )
+
+
+def test_lemma3_step_passes_the_full_mdp_counts_through(steps):
+    """The pipeline's step (``check_lemma3``) fed a ``General`` whose counts from the full MDP
+    are off at two pairs: it reports two differing pairs, and none without counts."""
+    params, built, _, bounds = steps
+    general = check_general(built, bounds, "residual", Tracker())  # counts nothing
+    assert check_lemma3(params, built, general, 3, Tracker()).full_mdp_rows_differ_pairs is None
+    counted = lemma3_cardinality(params).construction.copy()
+    counted[-2:, 1] += 1
+    planted = dataclasses.replace(general, counted=counted)
+    lem = check_lemma3(params, built, planted, 3, Tracker())
+    assert lem.full_mdp_rows_equal_construction is False
+    assert lem.full_mdp_rows_differ_pairs == 2
 
 
 # ---------------------------------------------------------------------- Claim 2
