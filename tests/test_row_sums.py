@@ -1,13 +1,12 @@
 """Accepted rows that do not sum to exactly 1: every DP bound holds for the model as stored.
 
-The reference is exact: V* of the stored model (its float64 entries are rationals) by
-enumerating the deterministic policies and solving ``(I - lambda P_pi) V = R_pi`` in
-rational arithmetic (``fractions.Fraction``), written here and independent of lpbounds.
+The reference is exact: V* of the stored model (its float64 entries are rationals) in
+rational arithmetic (``fractions.Fraction``, tests/_exact.py: policy iteration, then the
+Bellman equation checked exactly), independent of lpbounds.
 """
 
 from __future__ import annotations
 
-import itertools
 from fractions import Fraction
 
 import numpy as np
@@ -19,50 +18,9 @@ import lpbounds as lb
 from lpbounds.errors import ValidationError
 from lpbounds.stochastic import RowSums, row_sums
 
+from . import _exact as ex
+
 EPS = float(np.finfo(np.float64).eps)
-
-
-# ---------------------------------------------------------------------- exact reference
-def _solve_exact_rational(a: list[list[Fraction]], b: list[Fraction]) -> list[Fraction]:
-    """Gauss-Jordan elimination in exact arithmetic."""
-    n = len(b)
-    m = [[*row, b[i]] for i, row in enumerate(a)]
-    for col in range(n):
-        piv = next(r for r in range(col, n) if m[r][col] != 0)
-        m[col], m[piv] = m[piv], m[col]
-        p = m[col][col]
-        m[col] = [x / p for x in m[col]]
-        for r in range(n):
-            if r != col and m[r][col] != 0:
-                f = m[r][col]
-                m[r] = [x - f * y for x, y in zip(m[r], m[col], strict=True)]
-    return [m[i][n] for i in range(n)]
-
-
-def exact_policy_value(succ, probs, rewards, discount, policy) -> list[Fraction]:
-    """V_pi of the stored model, exactly: (I - lambda P_pi) V = R_pi over the rationals."""
-    n = succ.shape[0]
-    lam = Fraction(float(discount))
-    a = [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
-    b = []
-    for x in range(n):
-        u = policy[x]
-        for ll in range(succ.shape[2]):
-            a[x][int(succ[x, u, ll])] -= lam * Fraction(float(probs[x, u, ll]))
-        b.append(Fraction(float(rewards[x, u])))
-    return _solve_exact_rational(a, b)
-
-
-def exact_optimum(succ, probs, rewards, discount, allowed) -> np.ndarray:
-    """V* = the elementwise max of V_pi over every deterministic policy (exact, then rounded)."""
-    n = succ.shape[0]
-    choices = [np.flatnonzero(allowed[x]).tolist() for x in range(n)]
-    best = None
-    for pol in itertools.product(*choices):
-        v = exact_policy_value(succ, probs, rewards, discount, pol)
-        best = v if best is None else [max(p, q) for p, q in zip(best, v, strict=True)]
-    assert best is not None
-    return np.array([float(x) for x in best])
 
 
 # ---------------------------------------------------------------------- the two examples
@@ -157,7 +115,8 @@ def perturbed_mdps(draw):
 def test_every_dp_bound_holds_for_the_stored_rows(case):
     succ, probs, rewards, discount, allowed = case
     mdp = lb.FiniteMDP(succ, probs, rewards, discount, allowed)
-    truth = exact_optimum(mdp.successors, mdp.probabilities, mdp.rewards, discount, allowed)
+    exact = ex.mdp_groups(mdp.successors, mdp.probabilities, mdp.rewards, allowed, discount)
+    truth = ex.rounded(ex.fixed_point(exact))
     # the reference is exact up to its final rounding to float64
     ref_err = 2 * EPS * float(np.abs(truth).max(initial=0.0))
     scale = float(np.abs(mdp.rewards[mdp.allowed]).max()) / (1 - discount)
@@ -195,11 +154,9 @@ def test_every_dp_bound_holds_for_the_stored_rows(case):
         except lb.ConvergenceError:  # sweeps on self-loops at 0.99999: 2e6 > max_sweeps
             assert method == "iterative" and discount > 0.999
             continue
-        vpi = np.array(
-            [float(x) for x in exact_policy_value(
-                mdp.successors, mdp.probabilities, mdp.rewards, discount, res.policy
-            )]
-        )  # fmt: skip
+        vpi = ex.rounded(
+            ex.policy_value(mdp.successors, mdp.probabilities, mdp.rewards, discount, res.policy)
+        )
         assert float(np.abs(ev.values - vpi).max()) <= ev.error_bound + ref_err, method
 
 

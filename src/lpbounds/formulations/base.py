@@ -1102,7 +1102,11 @@ class Formulation:
         if cert is not None:
             lower, upper, bracket = self._bracket(cert)
             if bracket is not None and run.y is not None:
-                dual_lo = dual_objective_bound(self.A, self.b, self.c, y, cert.lower, cert.upper)
+                rows = getattr(self, "rows", None)
+                n_out = 1 if rows is None else int(rows.n_outcomes)
+                dual_lo = dual_objective_bound(
+                    self.A, self.b, self.c, y, cert.lower, cert.upper, n_out
+                )
                 bracket = (max(bracket[0], dual_lo), bracket[1])
             tol = accuracy * cert.reward_absmax
             accurate = self._accurate(cert, accuracy, obj, bracket)

@@ -55,7 +55,7 @@ from ..model.instances import load_instance
 from ..outputs import MANIFEST, AtomicDirectory, run_metadata
 from ..rows import BellmanRows
 from . import figures as figs
-from .bounds import LBLP, UBLP, Kind, lemma3_cardinality, patrol_rows
+from .bounds import LBLP, UBLP, Kind, Lemma3Cardinality, lemma3_cardinality, patrol_rows
 from .instance import params_from_instance
 from .model import PatrolModel
 from .params import PatrolParams
@@ -95,6 +95,9 @@ __all__ = [
     "claim_pairs",
     "draw_figures",
     "general_bound_residuals",
+    "inequality",
+    "lemma3_summary",
+    "policy_chain",
     "reproduce",
     "run_monte_carlo",
     "solve_bounds",
@@ -310,10 +313,26 @@ def _reward_spread(mdp: Any, labels: np.ndarray, n_partitions: int) -> float:
     return float((hi[has] - lo[has]).max(initial=0.0))
 
 
-def _err_le(
+def inequality(
     a: np.ndarray, b: np.ndarray, tol: float, comps: np.ndarray, stations: Sequence[int]
 ) -> Inequality:
-    """Margin of ``a <= b``: ``min(b - a)``, violations beyond ``tol``, the worst state."""
+    """The check ``a <= b`` over the states: its margin ``min(b - a)``, the number of
+    states where ``a - b > tol`` (violations) and the state of the smallest margin.
+
+    Parameters
+    ----------
+    a, b : ndarray (n_states,)
+        The two sides (``V_low`` and ``V*``, ...).
+    tol : float
+        The sum of the two sides' certified errors: only a difference beyond it counts.
+    comps : ndarray (n_states, 3 + m)
+        The states' components (names the worst state).
+    stations : sequence of int
+
+    Returns
+    -------
+    Inequality
+    """
     diff = b - a
     bad = np.flatnonzero(diff < -tol)
     return Inequality(
@@ -569,24 +588,52 @@ def check_lemma3(
     """Step 2c: Lemma 3's ``|T(i, u)|`` from the construction against the paper's formula."""
     with tr.step("lemma3", "Lemma 3: |T(i, u)|") as adv:
         card = lemma3_cardinality(params)
-        rows_d, acts_d = np.nonzero(card.differs)
-        examples = [
-            {
-                "partition": int(i),
-                "action": built.mdp.action_names[int(a)],
-                "taubar": int(card.taubar[i]),
-                "construction": int(card.construction[i, a]),
-                "paper": int(card.paper[i, a]),
-            }
-            for i, a in zip(rows_d[:n_examples], acts_d[:n_examples], strict=True)
-        ]
-        lem = Lemma3Summary(**card.summary(), examples=examples)
-        if general.counted is not None:
-            lem.full_mdp_rows_equal_construction = bool(
-                np.array_equal(general.counted, card.construction)
-            )
-            lem.full_mdp_rows_differ_pairs = int((general.counted != card.construction).sum())
+        lem = lemma3_summary(card, general.counted, built.mdp.action_names, n_examples)
         adv(status=f"{lem.pairs_differing} pairs differ")
+    return lem
+
+
+def lemma3_summary(
+    card: Lemma3Cardinality,
+    counted: np.ndarray | None,
+    action_names: Sequence[str],
+    n_examples: int,
+) -> Lemma3Summary:
+    """Lemma 3's check from the cardinalities it judges.
+
+    Parameters
+    ----------
+    card : Lemma3Cardinality
+        ``|T(i, u)|`` from the construction beside the paper's formula
+        (:func:`lpbounds.patrol.bounds.lemma3_cardinality`).
+    counted : ndarray (M, 3) of int, optional
+        ``|T(i, u)|`` counted from the full MDP's aggregated rows (``general="aggregate"``);
+        None: not compared.
+    action_names : sequence of str
+    n_examples : int
+        Differing pairs listed.
+
+    Returns
+    -------
+    Lemma3Summary
+        The pairs where the construction and the formula differ (count, examples) and,
+        with ``counted``, whether the full MDP's rows agree with the construction.
+    """
+    rows_d, acts_d = np.nonzero(card.differs)
+    examples = [
+        {
+            "partition": int(i),
+            "action": action_names[int(a)],
+            "taubar": int(card.taubar[i]),
+            "construction": int(card.construction[i, a]),
+            "paper": int(card.paper[i, a]),
+        }
+        for i, a in zip(rows_d[:n_examples], acts_d[:n_examples], strict=True)
+    ]
+    lem = Lemma3Summary(**card.summary(), examples=examples)
+    if counted is not None:
+        lem.full_mdp_rows_equal_construction = bool(np.array_equal(counted, card.construction))
+        lem.full_mdp_rows_differ_pairs = int((counted != card.construction).sum())
     return lem
 
 
@@ -705,8 +752,8 @@ def check_sandwich(
     with tr.step("sandwich", "sandwich, greedy policy pi_s and V_sub", 3) as adv:
         v_low_s = bounds.w_low[labels]
         v_up_s = bounds.v_up[labels]
-        lower = _err_le(v_low_s, vstar, bounds.err_low + err_v, comps, st)
-        upper = _err_le(vstar, v_up_s, bounds.err_up + err_v, comps, st)
+        lower = inequality(v_low_s, vstar, bounds.err_low + err_v, comps, st)
+        upper = inequality(vstar, v_up_s, bounds.err_up + err_v, comps, st)
         gap = bounds.v_up - bounds.w_low
         sandwich = SandwichSummary(
             lower_margin=lower.margin,
@@ -727,13 +774,52 @@ def check_sandwich(
         adv(status="greedy policy")
         ev = evaluate_policy(mdp, pi_s, method="iterative")
         adv(status="V_sub")
-        chain = {
-            "vlow_le_vsub": _err_le(v_low_s, ev.values, ev.error_bound + bounds.err_low, comps, st),
-            "vsub_le_vstar": _err_le(ev.values, vstar, ev.error_bound + err_v, comps, st),
-            "vstar_le_vup": _err_le(vstar, v_up_s, bounds.err_up + err_v, comps, st),
-        }
+        chain = policy_chain(
+            v_low_s,
+            ev.values,
+            vstar,
+            v_up_s,
+            errors=(bounds.err_low, ev.error_bound, err_v, bounds.err_up),
+            comps=comps,
+            stations=st,
+        )
         policy = _policy_summary(params, built, vs, pi_s, ev, chain)
     return SandwichAndPolicy(sandwich=sandwich, policy=policy, pi_s=pi_s, vsub=ev.values)
+
+
+def policy_chain(
+    v_low: np.ndarray,
+    vsub: np.ndarray,
+    vstar: np.ndarray,
+    v_up: np.ndarray,
+    *,
+    errors: tuple[float, float, float, float],
+    comps: np.ndarray,
+    stations: Sequence[int],
+) -> dict[str, Inequality]:
+    """The chain ``V_low <= V_sub <= V* <= V_up`` over the states, link by link.
+
+    Parameters
+    ----------
+    v_low, vsub, vstar, v_up : ndarray (n_states,)
+        ``Phi w*``, the value of the greedy policy, ``V*`` and ``Phi v*``.
+    errors : (float, float, float, float)
+        The certified errors of the four vectors, in that order: each link allows the sum
+        of its two sides' errors (:func:`inequality`).
+    comps : ndarray (n_states, 3 + m)
+    stations : sequence of int
+
+    Returns
+    -------
+    dict of str to Inequality
+        ``vlow_le_vsub``, ``vsub_le_vstar`` and ``vstar_le_vup``.
+    """
+    err_low, err_sub, err_v, err_up = errors
+    return {
+        "vlow_le_vsub": inequality(v_low, vsub, err_sub + err_low, comps, stations),
+        "vsub_le_vstar": inequality(vsub, vstar, err_sub + err_v, comps, stations),
+        "vstar_le_vup": inequality(vstar, v_up, err_up + err_v, comps, stations),
+    }
 
 
 def _policy_summary(
