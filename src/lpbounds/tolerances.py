@@ -293,6 +293,15 @@ LP_VALUE_SCALE_MAX: float = 2.0**26
 LP_OBJECTIVE_MAX: float = 2.0**1016
 
 
+# ---------------------------------------------------------------------- exact arithmetic
+#: The most variables an exact (rational) solve accepts unless ``size_limit=`` says otherwise
+#: (:func:`lpbounds.exact.system.check_size`): the variables of the largest exact linear
+#: system, i.e. the states of ``solve_exact(model, arithmetic="rational")``, the partitions
+#: of an exact RLP or NLP. Not a tolerance but a measured cost limit (docs/exact.md,
+#: "Limits"): PLACEHOLDER.
+EXACT_MAX_VARIABLES: int = 1000
+
+
 # ---------------------------------------------------------------------- plots
 #: :func:`lpbounds.plot.bounds` circles a state whose ``V*`` lies outside a bound given as a
 #: plain array (no certified bracket to judge by) only beyond ``PLOT_BOUND_RTOL * max(1,

@@ -10,7 +10,7 @@ into a certified bracket on that optimum (the result's ``lower_values``/``upper_
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -19,6 +19,9 @@ from ..dp import solve_exact
 from ..rows import BellmanRows
 from .base import Formulation, check_cost
 from .highs import tight_basis
+
+if TYPE_CHECKING:  # annotations only
+    from ..exact.lp import ExactLP
 
 __all__ = ["RowsLP"]
 
@@ -118,3 +121,29 @@ class RowsLP(Formulation):
     def fixed_point(self, tol: float | None = None) -> np.ndarray:
         """The exact optimum, solver-free: the fixed point of ``max`` over the rows (Fact 1)."""
         return solve_exact(self.rows, tol=tol).values
+
+    # ------------------------------------------------------------------ exact arithmetic
+    def exact_size(self) -> tuple[int, str]:
+        """The variables of the exact fixed point (:meth:`Formulation.exact_size`)."""
+        return self.rows.n_vars, f"{self.name}'s variables"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: this LP as the certificate describes it (the rows as stored,
+        each double exact: ``{"formulation": "ROWS"}``; ELP, RLP, SLP rebuild theirs from
+        the MDP in exact arithmetic)."""
+        from ..exact.files import rows_data
+
+        return rows_data(self.rows), {"formulation": "ROWS", "cost": self.exact_cost()}
+
+    def exact_cost(self) -> list[str]:
+        """The LP's cost as stored (each double exact, as hex)."""
+        return [float(t).hex() for t in self.c]
+
+    def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
+        """The rows' exact least fixed point and its policy's occupation measure."""
+        from ..exact.lp import bellman_lp
+
+        model, spec = self.exact_lp()
+        _, what = self.exact_size()
+        return bellman_lp(model, spec, approx=approx, callback=callback, size_limit=size_limit,
+                          what=what)  # fmt: skip

@@ -197,6 +197,21 @@ class SLP(RowsLP):
         allowed[o, a] = True
         return FiniteMDP(succ, probs, rewards, self.mdp.discount, allowed, self.mdp.action_names)
 
+    def exact_size(self) -> tuple[int, str]:
+        """The partitions (:meth:`Formulation.exact_size`)."""
+        return self.partition.n_partitions, "SLP's partitions"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 12 built by the checker from the MDP, the partition and
+        ``mu`` (each double exact) in its unnormalised form: the same feasible set as the
+        normalised rows (eq. SLPB) the float LP holds, without their rounding."""
+        from ..exact.files import mdp_data
+        from ..exact.rationals import RationalVector
+
+        model = mdp_data(self.mdp, self.partition)
+        mu = RationalVector.from_fractions(self.mu[self.mdp.allowed]).to_json()
+        return model, {"formulation": "SLP", "cost": self.exact_cost(), "mu": mu}
+
     @property
     def v(self) -> cp.Variable:
         """The cvxpy variable ``v`` (one entry per partition)."""
