@@ -119,7 +119,8 @@ def lp_objective_bracket(formulation: Any, result: Any, bracket: Bracket) -> tup
     lo, hi = objective_bracket(c, bracket.lower, bracket.upper)
     y = getattr(result, "duals", np.array([]))
     a, b = formulation.A, formulation.b
-    return max(lo, dual_objective_bound(a, b, c, y, bracket.lower, bracket.upper)), hi
+    rho = float(getattr(formulation, "row_rounding", 0.0))  # stored rows vs exact ones
+    return max(lo, dual_objective_bound(a, b, c, y, bracket.lower, bracket.upper, rho)), hi
 
 
 def dp_interval(dp_result: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -699,6 +699,14 @@ class Formulation:
             "positive multiple of the cost gives the same optimal point)"
         )
 
+    @property
+    def row_rounding(self) -> float:
+        """A bound ``rho`` on how far the stored rows ``(A, b)`` are from the exact rows of
+        the LP they stand for, relative (see
+        :func:`~lpbounds.certification.certificate.dual_objective_bound`): 0 here, where the
+        data is the LP."""
+        return 0.0
+
     def _rows_contract(self) -> bool:
         """Whether the row system behind the structural flags (``self.rows``, where the
         formulation has one) contracts, ``kappa = lambda max_r sum_l p_rl < 1``: rows may sum
@@ -1206,7 +1214,9 @@ class Formulation:
         if cert is not None:
             lower, upper, bracket = self._bracket(cert)
             if bracket is not None and run.y is not None:
-                dual_lo = dual_objective_bound(self.A, self.b, self.c, y, cert.lower, cert.upper)
+                dual_lo = dual_objective_bound(
+                    self.A, self.b, self.c, y, cert.lower, cert.upper, self.row_rounding
+                )
                 bracket = (max(bracket[0], dual_lo), bracket[1])
             tol = accuracy * cert.reward_absmax
             accurate = self._accurate(cert, accuracy, obj, bracket)

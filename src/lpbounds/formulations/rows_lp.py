@@ -80,6 +80,15 @@ class RowsLP(Formulation):
         mu = self.rows.pair_values(y) if self.rows.pair_row is not None else None
         return x, None, mu, {}
 
+    @property
+    def row_rounding(self) -> float:
+        """``2 (L + 3) eps``: the rows' ``A = E - lambda P`` is formed in floating point (the
+        owner's ``1 - lambda p`` cancels where a row reads its own variable: an error of
+        ``eps``, not of ``eps |1 - lambda p|``), and aggregated rows sum up to ``L``
+        probabilities per target, so ``sum_j |A_rj - A~_rj| <= (L + 2) eps (1 + lambda s_r)``
+        against the exact rows; the rewards are stored exactly."""
+        return 2.0 * (self.rows.n_outcomes + 3) * float(np.finfo(np.float64).eps)
+
     def _certify(self, x: np.ndarray) -> Certificate:
         """The bracket on the exact optimum (the least feasible point) from ``x`` alone."""
         return certify(self.rows, x)
