@@ -29,7 +29,7 @@ A failure names the entry (the LP or fixed point, the row or column, the compari
 
 **What it trusts:** Python's ``int``, :class:`fractions.Fraction`, :mod:`json`,
 ``float.fromhex`` (exact on the strings ``float.hex`` writes), :mod:`hashlib` (the
-digest that ties the claim to the model data) and this file, about 330 lines; nothing
+digest that ties the claim to the model data) and this file, about 410 lines; nothing
 from numpy, a solver, python-flint or the rest of lpbounds. Mathematics: LP weak duality
 (above) and, for claims stated on fixed points, Facts 1 and 2 of :mod:`lpbounds.rows`
 (for rows that contract, ``lambda max_r sum_l p_rl < 1``, which is checked here: the fixed
@@ -332,8 +332,9 @@ def value(e: dict, found: dict, model: dict) -> tuple[list[int], int]:
     return num, den
 
 
-def compare(k: int, c: dict, found: dict, model: dict) -> bool:
-    """One comparison: ``left REL right`` entrywise, its exact difference as stated."""
+def evaluate(k: int, c: dict, found: dict, model: dict) -> tuple[Fraction, bool]:
+    """Comparison ``k``, ``left REL right`` entrywise: its exact difference (``max |l - r|``
+    for ``==``, ``min (l - r)`` otherwise) and whether it holds."""
     (an, ad), (bn, bd) = value(c["left"], found, model), value(c["right"], found, model)
     if len(an) != len(bn):
         raise CheckError(f"comparison {k}: {len(an)} entries against {len(bn)}")
@@ -341,12 +342,16 @@ def compare(k: int, c: dict, found: dict, model: dict) -> bool:
     rel = c["relation"]
     if rel == "==":
         d = Fraction(max(abs(t) for t in diffs), ad * bd)
-        holds = d == 0
-    elif rel in (">=", ">"):
+        return d, d == 0
+    if rel in (">=", ">"):
         d = Fraction(min(diffs), ad * bd)
-        holds = d >= 0 if rel == ">=" else d > 0
-    else:
-        raise CheckError(f"comparison {k}: unknown relation {rel!r}")
+        return d, (d >= 0 if rel == ">=" else d > 0)
+    raise CheckError(f"comparison {k}: unknown relation {rel!r}")
+
+
+def compare(k: int, c: dict, found: dict, model: dict) -> bool:
+    """Comparison ``k`` evaluated; its difference and verdict must be those stated."""
+    d, holds = evaluate(k, c, found, model)
     if d != rat(c["difference"]) or ("holds" if holds else "violated") != c["verdict"]:
         raise CheckError(
             f"comparison {k} ({c.get('claim', '')}): the difference is {show(d)} "

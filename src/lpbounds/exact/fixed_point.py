@@ -203,14 +203,24 @@ def least_fixed_point(
         res = 0.0 if worst is None else nearest_float(-worst[0], worst[1] * v.denominator)
         history.append(res)
         if callback is not None:
-            callback(ExactProgress("improve", it, len(switched), rows.n_vars,
-                                   time.perf_counter() - t0, res))  # fmt: skip
+            callback(
+                ExactProgress(
+                    "improve", it, len(switched), rows.n_vars, time.perf_counter() - t0, res
+                )
+            )
         if not switched:
             if verify:
-                check.check_fixed_point("exact fixed point", {**rows.spec, "x": v.entry()},
-                                        check.load_model(rows.model))  # fmt: skip
-            return ExactFixedPoint(v, np.array(sel, dtype=np.int64), it - _it0,
-                                   time.perf_counter() - t0, rows, history=history)  # fmt: skip
+                check.check_fixed_point(
+                    "exact fixed point", {**rows.spec, "x": v.entry()}, check.load_model(rows.model)
+                )
+            return ExactFixedPoint(
+                v,
+                np.array(sel, dtype=np.int64),
+                it - _it0,
+                time.perf_counter() - t0,
+                rows,
+                history=history,
+            )
         for i, r in switched:
             sel[i] = r
     raise ConvergenceError(f"exact policy iteration did not stop in {MAX_EXACT_ITER} steps")
@@ -292,14 +302,24 @@ def game_fixed_point(
     form = rows.form()
     s_float = None if approx is None else rows.float_slacks(np.asarray(approx, dtype=np.float64))
     # the minimiser's term per disjunction: the largest slack (smallest q) at approx
-    tau = [max(groups[g], key=lambda r: (s_float[r], -r)) if s_float is not None else groups[g][0]
-           for g in keys]  # fmt: skip
+    tau = [
+        max(groups[g], key=lambda r: (s_float[r], -r)) if s_float is not None else groups[g][0]
+        for g in keys
+    ]
     inner = None if s_float is None else greedy_start(rows.subset(tau), approx)
     iterations, history = 0, []
     while True:
         sub = rows.subset(tau)
-        fp = least_fixed_point(sub, inner, callback=callback, size_limit=size_limit, what=what,
-                               verify=False, _t0=t0, _it0=iterations)  # fmt: skip
+        fp = least_fixed_point(
+            sub,
+            inner,
+            callback=callback,
+            size_limit=size_limit,
+            what=what,
+            verify=False,
+            _t0=t0,
+            _it0=iterations,
+        )
         iterations += fp.iterations
         history += fp.history
         s = rows.slacks(fp.values)
@@ -317,10 +337,20 @@ def game_fixed_point(
             )
         if not changed:
             v = fp.values
-            check.check_fixed_point("exact game value", {**rows.spec, "game": True, "x": v.entry()},
-                                    check.load_model(rows.model))  # fmt: skip
+            check.check_fixed_point(
+                "exact game value",
+                {**rows.spec, "game": True, "x": v.entry()},
+                check.load_model(rows.model),
+            )
             policy = np.array([tau[int(r)] for r in fp.policy], dtype=np.int64)
-            return ExactFixedPoint(v, policy, iterations, time.perf_counter() - t0, rows,
-                                   game=True, strategy=np.array(tau, dtype=np.int64),
-                                   history=history)  # fmt: skip
+            return ExactFixedPoint(
+                v,
+                policy,
+                iterations,
+                time.perf_counter() - t0,
+                rows,
+                game=True,
+                strategy=np.array(tau, dtype=np.int64),
+                history=history,
+            )
         inner = fp.policy  # the same disjunctions, new terms: keep the maximiser's choice

@@ -59,7 +59,16 @@ from .fixed_point import (
 from .rationals import RationalVector, fraction_text, rational, solve_rational
 from .system import ExactRows, ProgressCallback, check_size
 
-__all__ = ["TRUST", "ExactLP", "bellman_lp", "game_optimum", "ib_lp", "llp_lp", "simplex_lp"]
+__all__ = [
+    "TRUST",
+    "ExactLP",
+    "bellman_lp",
+    "certify_optimum",
+    "game_optimum",
+    "ib_lp",
+    "llp_lp",
+    "simplex_lp",
+]
 
 #: What every exact answer rests on (docs/exact.md, "Trust").
 TRUST = (
@@ -189,27 +198,54 @@ class ExactLP:
         return self
 
 
-def _verified(
+def certify_optimum(
     formulation: str,
     rows: ExactRows,
     x: RationalVector,
     y: RationalVector,
-    values: RationalVector,
     method: str,
     t0: float,
     fixed_point: ExactFixedPoint | None = None,
     unique: bool = False,
+    values: RationalVector | None = None,
 ) -> ExactLP:
-    """The ExactLP of ``(x, y)`` after the checker's verification (ConsistencyError if not)."""
+    """The ExactLP of a primal ``x`` and dual ``y`` of the LP ``rows`` (built from an LP
+    spec), after the checker's verification (:func:`lpbounds.exact.check.check_lp`).
+
+    ``values``: the value variables (default ``x``); ``t0``: when the computation started
+    (``time.perf_counter()``).
+
+    Raises
+    ------
+    ConsistencyError
+        When ``(x, y)`` does not prove optimality: a defect of whoever computed them.
+    """
+    values = x if values is None else values
     objective = x.dot(rows.cost)
-    entry = {"lp": rows.spec, "x": x.entry(), "y": y.entry(), "objective": objective,
-             "unique": unique}  # fmt: skip
+    entry = {
+        "lp": rows.spec,
+        "x": x.entry(),
+        "y": y.entry(),
+        "objective": objective,
+        "unique": unique,
+    }
     try:
         check.check_lp(formulation, entry, check.load_model(rows.model))
     except check.CheckError as exc:
         raise ConsistencyError(f"the exact {formulation} optimum fails its check: {exc}") from exc
-    return ExactLP(formulation, objective, x, y, values, rows.spec, rows.model, method,
-                   time.perf_counter() - t0, unique, fixed_point=fixed_point)  # fmt: skip
+    return ExactLP(
+        formulation,
+        objective,
+        x,
+        y,
+        values,
+        rows.spec,
+        rows.model,
+        method,
+        time.perf_counter() - t0,
+        unique,
+        fixed_point=fixed_point,
+    )
 
 
 def _positive_on(y: RationalVector, policy: np.ndarray) -> bool:
@@ -222,6 +258,7 @@ def bellman_lp(
     spec: dict[str, Any],
     *,
     approx: Any = None,
+    fixed_point: ExactFixedPoint | None = None,
     callback: ProgressCallback | None = None,
     size_limit: int | None = None,
     what: str = "a Bellman-row LP",
@@ -236,21 +273,39 @@ def bellman_lp(
         The LP: ``{"formulation": "RLP", "cost": [...]}`` (and ``"mu"`` for SLP).
     approx : array_like, optional
         An approximate optimum (the solver's ``x``): the start is its greedy policy.
+    fixed_point : ExactFixedPoint, optional
+        The rows' exact least fixed point, when already known (the optimum for every
+        cost, Fact 1): only the dual is then computed for ``spec``'s cost.
     callback, size_limit, what
         As in :func:`~lpbounds.exact.fixed_point.least_fixed_point`.
     """
     t0 = time.perf_counter()
     rows = ExactRows.build(model, spec)
     check_size(rows.n_vars, size_limit, what)
-    start = _start_of(rows, approx)
-    fp_rows = ExactRows(rows.rows, rows.n_vars, model, {**spec, "rows": spec["formulation"]},
-                        _form=rows.form())  # fmt: skip
-    fp_rows.spec.pop("formulation", None)
-    fp = least_fixed_point(fp_rows, start, callback=callback, size_limit=size_limit, what=what)
+    fp = fixed_point
+    if fp is None or fp.rows.n_rows != rows.n_rows or len(fp.values) != rows.n_vars:
+        spec_rows = {k: v for k, v in spec.items() if k not in ("formulation", "cost")}
+        fp_rows = ExactRows(
+            rows.rows,
+            rows.n_vars,
+            model,
+            {**spec_rows, "rows": spec["formulation"]},
+            _form=rows.form(),
+        )
+        fp = least_fixed_point(
+            fp_rows, _start_of(rows, approx), callback=callback, size_limit=size_limit, what=what
+        )
     y = occupation_measure(rows, fp.policy, rows.cost)
-    return _verified(spec["formulation"], rows, fp.values, y, fp.values,
-                     "fixed point and occupation measure", t0, fp,
-                     _positive_on(y, fp.policy))  # fmt: skip
+    return certify_optimum(
+        spec["formulation"],
+        rows,
+        fp.values,
+        y,
+        "fixed point and occupation measure",
+        t0,
+        fp,
+        _positive_on(y, fp.policy),
+    )
 
 
 def _start_of(rows: ExactRows, approx: Any) -> np.ndarray | None:
@@ -287,8 +342,9 @@ def ib_lp(
         base = ExactRows.build(model, {"rows": "RLP"})
         check_size(base.n_vars, size_limit, "RLP's partitions")
         start = None if approx is None else _start_of(base, np.asarray(approx)[: base.n_vars])
-        rlp = least_fixed_point(base, start, callback=callback, size_limit=size_limit,
-                                what="RLP's partitions")  # fmt: skip
+        rlp = least_fixed_point(
+            base, start, callback=callback, size_limit=size_limit, what="RLP's partitions"
+        )
     m, k = rlp.rows.n_vars, rlp.rows.n_rows
     if rows.n_vars != L * m or rows.n_rows != L * k:
         raise ConsistencyError("IB's rows are not L copies of RLP's")
@@ -301,12 +357,24 @@ def ib_lp(
         y = RationalVector(list(y1.numerators) * L, y1.denominator)
     else:
         y = occupation_measure(rows, policy, c)
-    return _verified("IB", rows, x, y, x.take(range(m)), "RLP's fixed point in every block",
-                     t0, rlp, _positive_on(y, policy))  # fmt: skip
+    return certify_optimum(
+        "IB",
+        rows,
+        x,
+        y,
+        "RLP's fixed point in every block",
+        t0,
+        rlp,
+        _positive_on(y, policy),
+        values=x.take(range(m)),
+    )
 
 
 def _text(c: Any) -> str:
-    """A cost entry for the spec: a double's hex, or ``"p/q"``."""
+    """A cost entry for the spec: a certificate's number as given, a double's hex, or a
+    Fraction's ``"p/q"``."""
+    if isinstance(c, str):
+        return c
     if isinstance(c, Fraction):
         return fraction_text(c)
     return float(c).hex()
@@ -451,8 +519,8 @@ def simplex_lp(
     x0 = [Fraction(float(t)) if np.isfinite(t) else Fraction(0) for t in a]
     x, y = _simplex(rows.rows, rows.cost, _feasible_start(rows.rows, rows.cost, x0))
     xv, yv = RationalVector.from_fractions(x), RationalVector.from_fractions(y)
-    return _verified(
-        spec["formulation"], rows, xv, yv, xv, "exact simplex from the solver's point", t0
+    return certify_optimum(
+        spec["formulation"], rows, xv, yv, "exact simplex from the solver's point", t0
     )
 
 
@@ -474,8 +542,9 @@ def llp_lp(
     m, k = base.n_vars, base.n_rows
     if rlp is None:
         start = None if approx is None else _start_of(base, np.asarray(approx)[:m])
-        rlp = least_fixed_point(base, start, callback=callback, size_limit=size_limit,
-                                what="LLP's partitions")  # fmt: skip
+        rlp = least_fixed_point(
+            base, start, callback=callback, size_limit=size_limit, what="LLP's partitions"
+        )
     cbar, dd = [rational(t) for t in cost], [rational(t) for t in d]
     g = list(cbar)  # g = c-bar + A'd over the per-pair rows
     for (coefs, *_), dk in zip(base.rows, dd, strict=True):
@@ -501,7 +570,7 @@ def llp_lp(
     rows = ExactRows.build(model, spec)
     if rows.n_rows != 3 * k:
         raise ConsistencyError("LLP's rows are not three groups of the pairs")
-    return _verified("LLP", rows, x, y, x.take(range(m)), method, t0, rlp)
+    return certify_optimum("LLP", rows, x, y, method, t0, rlp, values=x.take(range(m)))
 
 
 def game_optimum(
@@ -519,6 +588,16 @@ def game_optimum(
     rows = ExactRows.build(model, {"rows": "NLP"})
     fp = game_fixed_point(rows, approx, callback=callback, size_limit=size_limit)
     objective = fp.values.dot([rational(t) for t in cost])
-    return ExactLP("NLP", objective, fp.values, None, fp.values, {"rows": "NLP"}, model,
-                   "exact strategy iteration", time.perf_counter() - t0, False,
-                   fixed_point=fp)  # fmt: skip
+    return ExactLP(
+        "NLP",
+        objective,
+        fp.values,
+        None,
+        fp.values,
+        {"rows": "NLP"},
+        model,
+        "exact strategy iteration",
+        time.perf_counter() - t0,
+        False,
+        fixed_point=fp,
+    )

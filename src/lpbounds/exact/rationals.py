@@ -27,6 +27,7 @@ from typing import Any, overload
 import numpy as np
 
 from ..errors import SolverNotInstalledError, ValidationError
+from . import check
 
 __all__ = [
     "RationalVector",
@@ -59,7 +60,8 @@ def flint_module() -> Any:
 
 
 def rational(x: Any) -> Fraction:
-    """``x`` as an exact Fraction: a float's exact dyadic value, an int, or a Fraction.
+    """``x`` as an exact Fraction: a float's exact dyadic value, an int, a Fraction, or a
+    certificate's number (a ``"p/q"`` string or a hex float, :func:`lpbounds.exact.check.rat`).
 
     Raises
     ------
@@ -68,6 +70,11 @@ def rational(x: Any) -> Fraction:
     """
     if isinstance(x, Fraction):
         return x
+    if isinstance(x, str):
+        try:
+            return check.rat(x)
+        except (check.CheckError, ValueError) as exc:
+            raise ValidationError(f"{x!r} is not a number of a certificate: {exc}") from exc
     if isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_)):
         return Fraction(int(x))
     if isinstance(x, (float, np.floating)):

@@ -43,6 +43,7 @@ only where it still applies (see :meth:`Formulation.solve`).
 
 from __future__ import annotations
 
+import copy
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -1150,15 +1151,24 @@ class Formulation:
         approx = None if result is None else result.x
         exact = self._exact_route(approx, size_limit, callback)
         if result is not None:
-            lo, hi = result.lower_values, result.upper_values
-            exact.judge(
-                result.values,
-                lo,
-                hi,
-                result.objective,
-                self._exact_bracket_target(exact, size_limit),
-            )
+            exact = self.judge_exact(exact, result, size_limit=size_limit)
         return exact
+
+    def judge_exact(
+        self, exact: ExactLP, result: LPResult, *, size_limit: int | None = None
+    ) -> ExactLP:
+        """A copy of ``exact`` (this LP's exact optimum) judging the float ``result``: its
+        exact error and whether its certified bracket held (on what the bracket is about:
+        the optimum, or ``V*`` for ALP, RLP's ``v*`` for LLP)."""
+        out = copy.copy(exact)
+        out.judge(
+            result.values,
+            result.lower_values,
+            result.upper_values,
+            result.objective,
+            self._exact_bracket_target(exact, size_limit),
+        )
+        return out
 
     def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
         """The exact optimum (hook; :meth:`exact_size` refuses where there is none)."""

@@ -371,17 +371,28 @@ class LLP(Formulation):
         """The partitions (the reduced LP's variables, :func:`lpbounds.exact.lp.llp_lp`)."""
         return self._m, "LLP's partitions"
 
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 18 with surplus lifting, built by the checker from the MDP,
+        the partition, ``c-bar`` and ``d`` over the allowed pairs (each double exact)."""
+        from ..exact.files import mdp_data
+
+        xs, us = self.pairs[:, 0], self.pairs[:, 1]
+        lp = {
+            "formulation": "LLP",
+            "cost": [float(t).hex() for t in self.c[: self._m]],
+            "d": [float(t).hex() for t in self.d[xs, us]],
+        }
+        return mdp_data(self.mdp, self.partition), lp
+
     def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
         """Eliminate ``z``: RLP's fixed point when ``c-bar + A'd >= 0``, else the exact
         simplex from it (:func:`lpbounds.exact.lp.llp_lp`)."""
-        from ..exact.files import mdp_data
         from ..exact.lp import llp_lp
 
-        model = mdp_data(self.mdp, self.partition)
-        xs, us = self.pairs[:, 0], self.pairs[:, 1]
+        model, spec = self.exact_lp()
         v0 = None if approx is None else np.asarray(approx)[: self._m]
-        return llp_lp(model, list(self.c[: self._m]), list(self.d[xs, us]), approx=v0,
-                      callback=callback, size_limit=size_limit)  # fmt: skip
+        return llp_lp(model, spec["cost"], spec["d"], approx=v0, callback=callback,
+                      size_limit=size_limit)  # fmt: skip
 
     def _exact_bracket_target(self, exact: ExactLP, size_limit: int | None) -> Any:
         """LLP's bracket is on RLP's ``v*`` (:meth:`_certify`)."""
