@@ -124,16 +124,32 @@ def test_exact_from_a_bad_start_needs_more_iterations_same_answer():
     assert worst.iterations >= best.iterations
 
 
-def test_size_limit_refused_up_front_naming_size_limit_and_option(monkeypatch):
-    mdp = lb.garnet(30, 2, 2, 0.9, seed=1)
+def test_size_limit_refused_before_any_exact_solve(monkeypatch):
+    """A random garnet's policy graph is one strongly connected block: refused before any
+    rational solve starts, in one line naming the size, the limit and the option."""
+    mdp = lb.garnet(30, 2, 3, 0.9, seed=1)
     called = []
-    monkeypatch.setattr("lpbounds.dp.mpi_loop", lambda *a, **k: called.append(1))
+    monkeypatch.setattr("lpbounds.exact.system._solve_block", lambda *a, **k: called.append(1))
     with pytest.raises(SizeLimitError) as exc:
-        lb.solve_exact(mdp, arithmetic="rational", size_limit=29)
+        lb.solve_exact(mdp, arithmetic="rational", size_limit=5)
     msg = str(exc.value)
-    assert "30 variables" in msg and "limit of 29" in msg and "size_limit=30" in msg
-    assert "\n" not in msg and not called  # one line; no float solve started
+    k = int(msg.split(": ")[1].split(" variables")[0])
+    assert 5 < k <= 30 and "limit of 5" in msg and f"size_limit={k}" in msg and "of 30" in msg
+    assert "\n" not in msg and not called  # one line; no exact block solved
     assert isinstance(exc.value, ValidationError)
+    monkeypatch.undo()
+    lb.solve_exact(mdp, arithmetic="rational", size_limit=k)  # the option lifts it
+
+
+def test_a_chain_passes_any_size_limit():
+    """Sparsity pays: a chain's policy graph has components of one state, solved one by one,
+    so even size_limit=1 passes (and the answer is the reference's)."""
+    n = 6
+    succ = np.minimum(np.arange(n) + 1, n - 1)[:, None, None] * np.ones((1, 2, 1), dtype=int)
+    rewards = np.random.default_rng(0).uniform(0, 1, (n, 2))
+    mdp = lb.FiniteMDP(succ, [1.0], rewards, 0.9)
+    res = lb.solve_exact(mdp, arithmetic="rational", size_limit=1)
+    assert list(res.rational_values) == ref.vstar(mdp)
 
 
 def test_progress_callback_and_interrupt_propagates():

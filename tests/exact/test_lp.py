@@ -202,8 +202,8 @@ def test_rational_refused_with_extra_constraints_and_on_plain_formulations():
     plain = Formulation(sp.csr_matrix(np.eye(2)), np.zeros(2), np.ones(2))
     with pytest.raises(ValidationError, match="no exact route"):
         plain.solve("HIGHS", arithmetic="rational")
-    with pytest.raises(SizeLimitError, match="size_limit=4"):
-        form.solve("HIGHS", arithmetic="rational", size_limit=3)
+    with pytest.raises(SizeLimitError, match="size_limit="):
+        ELP(lb.garnet(12, 2, 3, seed=0)).solve("HIGHS", arithmetic="rational", size_limit=1)
 
 
 def test_planted_wrong_dual_fails_the_check():

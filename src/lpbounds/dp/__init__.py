@@ -645,8 +645,10 @@ def solve_exact(
         improvement check with its exact residual (0 at the end). The float path is
         unchanged by this option.
     size_limit : int, optional
-        ``arithmetic="rational"``: the most states accepted (default
-        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), checked before any work.
+        ``arithmetic="rational"``: the most states solved together (default
+        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`): the largest strongly connected
+        component of the float solve's policy, checked before any exact work (a model
+        whose policy graph is a chain of small components passes at any size).
 
     Returns
     -------
@@ -660,7 +662,8 @@ def solve_exact(
         entry, a non-integer ``max_iter``, an ``eval_sweeps`` neither a non-negative
         integer nor ``"auto"``, an unknown method or arithmetic.
     SizeLimitError
-        ``arithmetic="rational"`` on more than ``size_limit`` states (before any work).
+        ``arithmetic="rational"``: a policy component of more than ``size_limit`` states
+        (after the float solve, before any exact work).
     ConvergenceError
         At ``max_iter`` with ``raise_on_failure``; or if the iterates overflow.
     """
@@ -773,12 +776,10 @@ def _solve_rational(
 ) -> DPResult:
     """``solve_exact(..., arithmetic="rational")``: size check, float solve, exact PI."""
     from ..exact.fixed_point import least_fixed_point
-    from ..exact.system import ExactRows, check_size
+    from ..exact.system import ExactRows
 
     _check_callback(callback)
-    n = model.n_states if isinstance(model, FiniteMDP) else exact_rows(model).n_vars
     data, spec, what = _exact_model(model)
-    check_size(n, size_limit, what)
     fl = solve_exact(model, method, **float_options)
     rows = ExactRows.build(data, spec)
     fp = least_fixed_point(rows, fl.policy_rows, callback=_exact_callback(callback),
@@ -1326,7 +1327,7 @@ def solve_game(
     strategy iteration (:func:`lpbounds.exact.game_fixed_point`) on the rows as stored
     (each double taken exactly); the result is as :func:`solve_exact`'s with
     ``arithmetic="rational"`` (``rational_values``, exact ``error_bound``), ``size_limit``
-    the most variables accepted.
+    the most variables solved together.
 
     Returns
     -------
@@ -1357,10 +1358,9 @@ def _solve_game_rational(
     iteration on the rows as stored (their groups: the rows' (owner, action))."""
     from ..exact.files import rows_data
     from ..exact.fixed_point import game_fixed_point
-    from ..exact.system import ExactRows, check_size
+    from ..exact.system import ExactRows
 
     _check_callback(callback)
-    check_size(rows.n_vars, size_limit, "the game's variables")
     fl = solve_game(rows, **float_options)
     er = ExactRows.build(rows_data(rows), {"rows": "ROWS"})
     fp = game_fixed_point(er, fl.values, callback=_exact_callback(callback),

@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import ConsistencyError, ConvergenceError, ValidationError
 from . import check
 from .rationals import RationalVector, nearest_float, rational
-from .system import ExactProgress, ExactRows, ProgressCallback, check_size
+from .system import ExactProgress, ExactRows, ProgressCallback
 
 __all__ = [
     "ExactFixedPoint",
@@ -166,8 +166,9 @@ def least_fixed_point(
     callback : callable(ExactProgress), optional
         Progress: after every component solved and every improvement check.
     size_limit : int, optional
-        Refuse more variables than this (default
-        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`).
+        Refuse a policy whose largest strongly connected component (one dense solve) has
+        more variables (default :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), before
+        that evaluation starts.
     what : str
         The system's name in the size error.
     verify : bool
@@ -181,11 +182,11 @@ def least_fixed_point(
     Raises
     ------
     SizeLimitError
-        Before any work, above ``size_limit``.
+        Before an evaluation whose largest component is above ``size_limit`` (in practice
+        the first: the float policy is the exact one).
     ConvergenceError
         After :data:`MAX_EXACT_ITER` improvements (never seen).
     """
-    check_size(rows.n_vars, size_limit, what)
     t0 = time.perf_counter() if _t0 is None else _t0
     owned = _by_owner(rows)
     sel = _start(rows, owned, start)
@@ -197,7 +198,7 @@ def least_fixed_point(
             if callback is not None:
                 callback(ExactProgress("evaluate", it - 1, done, total, time.perf_counter() - t0))
 
-        v = rows.solve_policy(sel, progress=step)
+        v = rows.solve_policy(sel, progress=step, size_limit=size_limit, what=what)
         s = rows.slacks(v)
         switched, worst = _improve(owned, form, s)
         res = 0.0 if worst is None else nearest_float(-worst[0], worst[1] * v.denominator)
@@ -247,7 +248,9 @@ def _improve(
     return switched, worst
 
 
-def occupation_measure(rows: ExactRows, policy: Any, cost: Any) -> RationalVector:
+def occupation_measure(
+    rows: ExactRows, policy: Any, cost: Any, *, size_limit: int | None = None
+) -> RationalVector:
     """The dual of the Bellman-row LP ``min c'x s.t. A x >= b`` at a policy: the solution
     of ``A_pi' y_pi = c`` on the policy's rows, 0 on every other row.
 
@@ -259,7 +262,7 @@ def occupation_measure(rows: ExactRows, policy: Any, cost: Any) -> RationalVecto
     """
     sel = [int(r) for r in np.asarray(policy).ravel()]
     c = [rational(t) for t in cost]
-    z = rows.solve_policy(sel, transpose=True, rhs=c)
+    z = rows.solve_policy(sel, transpose=True, rhs=c, size_limit=size_limit, what="the dual")
     num = [0] * rows.n_rows
     for i, r in enumerate(sel):
         num[r] = z.numerators[i]
@@ -292,7 +295,6 @@ def game_fixed_point(
         ``game=True``; ``strategy`` the term of every disjunction (in the order of first
         appearance of the disjunctions in ``rows``).
     """
-    check_size(rows.n_vars, size_limit, what)
     t0 = time.perf_counter()
     _by_owner(rows)
     groups: dict[Any, list[int]] = {}

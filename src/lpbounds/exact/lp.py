@@ -281,7 +281,6 @@ def bellman_lp(
     """
     t0 = time.perf_counter()
     rows = ExactRows.build(model, spec)
-    check_size(rows.n_vars, size_limit, what)
     fp = fixed_point
     if fp is None or fp.rows.n_rows != rows.n_rows or len(fp.values) != rows.n_vars:
         spec_rows = {k: v for k, v in spec.items() if k not in ("formulation", "cost")}
@@ -295,7 +294,7 @@ def bellman_lp(
         fp = least_fixed_point(
             fp_rows, _start_of(rows, approx), callback=callback, size_limit=size_limit, what=what
         )
-    y = occupation_measure(rows, fp.policy, rows.cost)
+    y = occupation_measure(rows, fp.policy, rows.cost, size_limit=size_limit)
     return certify_optimum(
         spec["formulation"],
         rows,
@@ -340,7 +339,6 @@ def ib_lp(
     rows = ExactRows.build(model, spec)
     if rlp is None:
         base = ExactRows.build(model, {"rows": "RLP"})
-        check_size(base.n_vars, size_limit, "RLP's partitions")
         start = None if approx is None else _start_of(base, np.asarray(approx)[: base.n_vars])
         rlp = least_fixed_point(
             base, start, callback=callback, size_limit=size_limit, what="RLP's partitions"
@@ -353,10 +351,10 @@ def ib_lp(
     policy = np.concatenate([rlp.policy + j * k for j in range(L)])
     c = [rational(t) for t in cost]
     if all(c[j * m + i] == c[i] for j in range(L) for i in range(m)):
-        y1 = occupation_measure(rlp.rows, rlp.policy, c[:m])
+        y1 = occupation_measure(rlp.rows, rlp.policy, c[:m], size_limit=size_limit)
         y = RationalVector(list(y1.numerators) * L, y1.denominator)
     else:
-        y = occupation_measure(rows, policy, c)
+        y = occupation_measure(rows, policy, c, size_limit=size_limit)
     return certify_optimum(
         "IB",
         rows,
@@ -538,7 +536,6 @@ def llp_lp(
     per partition), ``d`` the surplus costs of the allowed pairs (row-major)."""
     t0 = time.perf_counter()
     base = ExactRows.build(model, {"rows": "RLP"})
-    check_size(base.n_vars, size_limit, "LLP's partitions")
     m, k = base.n_vars, base.n_rows
     if rlp is None:
         start = None if approx is None else _start_of(base, np.asarray(approx)[:m])
@@ -551,7 +548,7 @@ def llp_lp(
         for j, a in coefs.items():
             g[j] += a * dk
     if all(t >= 0 for t in g):
-        v, mu = rlp.values, occupation_measure(base, rlp.policy, g)
+        v, mu = rlp.values, occupation_measure(base, rlp.policy, g, size_limit=size_limit)
         method = "RLP's fixed point (g >= 0) and its occupation measure"
     else:
         reduced = ExactRows(base.rows, m, model, {"formulation": "LLP-reduced"}, g, base.form())

@@ -77,17 +77,20 @@ class ExactProgress:
 ProgressCallback = Callable[[ExactProgress], None]
 
 
-def check_size(n_vars: int, size_limit: int | None, what: str) -> None:
-    """Refuse, before any work, an exact solve of more than ``size_limit`` variables.
+def check_size(n_block: int, size_limit: int | None, what: str, n_vars: int | None = None) -> None:
+    """Refuse, before it starts, a dense exact solve of more than ``size_limit`` variables.
 
     Parameters
     ----------
-    n_vars : int
-        Variables of the largest exact linear system the computation solves.
+    n_block : int
+        Variables of the largest dense system the solve needs (a policy's largest strongly
+        connected component, :meth:`ExactRows.solve_policy`; an LP basis).
     size_limit : int or None
         The limit (default :data:`lpbounds.tolerances.EXACT_MAX_VARIABLES`).
     what : str
         The system, for the message ("the MDP's states", "RLP's partitions").
+    n_vars : int, optional
+        All the system's variables, when the block is part of them (for the message).
 
     Raises
     ------
@@ -95,11 +98,12 @@ def check_size(n_vars: int, size_limit: int | None, what: str) -> None:
         One line naming the size, the limit and the option that lifts it.
     """
     limit = EXACT_MAX_VARIABLES if size_limit is None else int(size_limit)
-    if n_vars > limit:
+    if n_block > limit:
+        part = "" if n_vars is None else f" (the largest strongly connected block of {n_vars})"
         raise SizeLimitError(
-            f"exact arithmetic on {what}: {n_vars} variables, above the limit of {limit} "
-            f"(a dense rational solve grows as n^3 on numbers of about n * 100 bits); pass "
-            f"size_limit={n_vars} to lift it"
+            f"exact arithmetic on {what}: {n_block} variables solved together{part}, above "
+            f"the limit of {limit} (a dense rational solve grows as n^3 on numbers of about "
+            f"n * 100 bits); pass size_limit={n_block} to lift it"
         )
 
 
@@ -205,6 +209,8 @@ class ExactRows:
         transpose: bool = False,
         rhs: Sequence[Fraction] | None = None,
         progress: Callable[[int, int], None] | None = None,
+        size_limit: int | None = None,
+        what: str = "a row system",
     ) -> RationalVector:
         """The exact solution of the square system of the rows ``sel`` (one per variable).
 
@@ -218,6 +224,10 @@ class ExactRows:
             The right-hand side of the transposed system (required with ``transpose``).
         progress : callable(done, total), optional
             Called after each component with the variables solved so far.
+        size_limit : int, optional
+            The largest component accepted (:func:`check_size`, before any block is solved).
+        what : str
+            The system's name in the size error.
 
         Returns
         -------
@@ -244,6 +254,7 @@ class ExactRows:
         # a component after every component it reads (for the transpose, ``links`` are the
         # reversed edges: the rows that read a column come first)
         comps = _components(links)
+        check_size(max((len(c) for c in comps), default=0), size_limit, what, n)
         val: list[Any] = [None] * n
         done = 0
         for comp in comps:

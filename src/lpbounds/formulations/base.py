@@ -982,8 +982,8 @@ class Formulation:
             (and any :class:`~lpbounds.formulations.RowsLP`); not with
             ``extra_constraints``.
         size_limit : int, optional
-            ``arithmetic="rational"``: the most variables of an exact solve (default
-            :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), checked before the solver runs.
+            ``arithmetic="rational"``: the most variables one dense exact solve takes
+            (default :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`; :meth:`exact_optimum`).
         **solver_options
             Passed to the solver through cvxpy. HiGHS' own ``solver`` option clashes
             with this method's ``solver`` argument, so HiGHS options go in a dict:
@@ -1061,7 +1061,7 @@ class Formulation:
                     "arithmetic='rational' solves the formulation's own LP: not with "
                     "extra_constraints"
                 )
-            self.check_exact_size(size_limit)
+            self.exact_size()  # no exact route: refused before the solver runs
         name = resolve_solver(solver)
         route = self._backend(backend, name, warm_start, extras)
         self._check_representable()
@@ -1095,25 +1095,19 @@ class Formulation:
 
     # ------------------------------------------------------------------ exact arithmetic
     def exact_size(self) -> tuple[int, str]:
-        """``(variables, what)`` of the largest exact system :meth:`exact_optimum` solves.
+        """``(variables, what)``: the variables of the exact system :meth:`exact_optimum`
+        solves and its name (the words of a size error).
 
         Raises
         ------
         ValidationError
-            Here: a formulation without an exact route (a plain :class:`Formulation`).
+            Here: a formulation without an exact route (a plain :class:`Formulation`); called
+            before the solver runs, so such a request fails before any work.
         """
         raise ValidationError(
             f"{self.name} has no exact route: arithmetic='rational' is implemented for ELP, "
             "RLP, SLP, IB, ALP, LLP, UBLP, LBLP and any RowsLP"
         )
-
-    def check_exact_size(self, size_limit: int | None = None) -> None:
-        """Refuse, before any work, an exact solve above ``size_limit`` variables
-        (:class:`~lpbounds.errors.SizeLimitError`)."""
-        from ..exact.system import check_size
-
-        n, what = self.exact_size()
-        check_size(n, size_limit, what)
 
     def exact_optimum(
         self,
@@ -1132,7 +1126,9 @@ class Formulation:
             whether its certified bracket held (:meth:`ExactLP.judge
             <lpbounds.exact.lp.ExactLP.judge>`).
         size_limit : int, optional
-            The most variables (default :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`).
+            The most variables one dense exact solve takes (default
+            :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`): a policy's largest strongly
+            connected component, checked before it is solved.
         callback : callable(ExactProgress), optional
             Progress of the exact computation (:class:`lpbounds.exact.system.ExactProgress`).
 
@@ -1143,11 +1139,11 @@ class Formulation:
         Raises
         ------
         SizeLimitError
-            Above ``size_limit`` (before any work).
+            Above ``size_limit`` (before the exact solve).
         ValidationError
             For a formulation without an exact route.
         """
-        self.check_exact_size(size_limit)
+        self.exact_size()
         approx = None if result is None else result.x
         exact = self._exact_route(approx, size_limit, callback)
         if result is not None:

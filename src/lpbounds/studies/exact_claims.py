@@ -47,7 +47,7 @@ from ..exact.files import certificate, mdp_data, write_certificate
 from ..exact.fixed_point import ExactFixedPoint, least_fixed_point
 from ..exact.lp import ExactLP, bellman_lp, certify_optimum, ib_lp, llp_lp, simplex_lp
 from ..exact.rationals import RationalVector, fraction_text
-from ..exact.system import ExactRows, check_size
+from ..exact.system import ExactRows
 from ..formulations.base import Formulation, LPResult
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
@@ -199,15 +199,15 @@ class ExactInstance:
     ib_blocks : sequence of int
         IB's block counts (Theorem 2).
     size_limit : int, optional
-        The most variables of an exact solve (default
-        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), checked at construction.
+        The most variables an exact solve solves together (default
+        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), checked before each exact solve.
     progress : callable(str), optional
         Called as each exact piece starts.
 
     Raises
     ------
     SizeLimitError
-        At construction, above ``size_limit`` states.
+        From an exact solve above ``size_limit`` (before it starts).
     """
 
     def __init__(
@@ -228,7 +228,6 @@ class ExactInstance:
             )
         if not costs:
             raise ValidationError("costs: at least one cost is needed")
-        check_size(mdp.n_states, size_limit, f"{name}'s states")
         self.name, self.mdp, self.partition = name, mdp, partition
         self.costs = [np.asarray(c, dtype=np.float64) for c in costs]
         self.d_list = [np.asarray(d, dtype=np.float64) for d in d_list]
@@ -529,7 +528,6 @@ def decide_remark2(
     costs would make an equality. ``approx``: the solvers' points to start the exact
     simplex from (optional)."""
     t0 = time.perf_counter()
-    check_size(mdp.n_states, size_limit, f"{name}'s states")
     model = mdp_data(mdp)
     phi = np.asarray(basis.toarray() if hasattr(basis, "toarray") else basis, dtype=np.float64)
     c1 = [Fraction(float(t)) for t in np.asarray(cost1, dtype=np.float64)]

@@ -433,8 +433,8 @@ class NLP:
             rationals); ``result.exact`` holds it with the method's exact error and whether
             its certified bracket held. The float result is unchanged.
         size_limit : int, optional
-            ``arithmetic="rational"``: the most partitions (default
-            :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), checked before any work.
+            ``arithmetic="rational"``: the most partitions solved together (default
+            :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), checked before any exact work.
         **options
             The method's own keywords, listed under Other Parameters.
 
@@ -491,10 +491,6 @@ class NLP:
         opts = _method_options(method, options)
         if arithmetic not in ("float", "rational"):
             raise ValidationError(f"arithmetic must be 'float' or 'rational'; got {arithmetic!r}")
-        if arithmetic == "rational":
-            from ...exact.system import check_size
-
-            check_size(self.rows.n_vars, size_limit, "the NLP's partitions")
         t0 = time.perf_counter()
         with _progress_bar(progress, method, opts.get("max_iter")) as tick, threads_for(self.rows):
             if method == "cutting-planes":
