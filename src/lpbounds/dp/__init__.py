@@ -729,15 +729,15 @@ def _exact_result(
     model: Model, fp: ExactFixedPoint, fl: DPResult, t0: float, method: str
 ) -> DPResult:
     """The DPResult of an exact fixed point: ``values`` its nearest doubles, ``error_bound``
-    their exact distance from it rounded up, ``residual`` the float residual of ``values``."""
+    their exact distance from it rounded up, ``residual`` the float residual of ``values``
+    (of ``T``, or of the game's ``G`` when ``fp.game``)."""
     values = fp.values.to_floats()
     err = float(fp.values.max_abs_error(values))  # rounded to nearest: one step up covers it
-    rows = exact_rows(model) if isinstance(model, FiniteMDP) else model
-    assert isinstance(rows, BellmanRows)
-    tv, _ = rows.apply_max(values)
+    rows = exact_rows(model)
+    tv, _ = rows.apply_maxmin(values) if fp.game else rows.apply_max(values)
     return DPResult(
         values=values,
-        policy=_policy_out(model, rows, fp.policy),
+        policy=fp.policy if fp.game else _policy_out(model, rows, fp.policy),
         policy_rows=fp.policy,
         residual=float(np.abs(tv - values).max(initial=0.0)),
         error_bound=float(np.nextafter(err, np.inf)) if err > 0 else 0.0,
@@ -774,7 +774,7 @@ def _solve_rational(
     method: Method,
     **float_options: Any,
 ) -> DPResult:
-    """``solve_exact(..., arithmetic="rational")``: size check, float solve, exact PI."""
+    """``solve_exact(..., arithmetic="rational")``: the float solve, then exact PI."""
     from ..exact.fixed_point import least_fixed_point
     from ..exact.system import ExactRows
 
@@ -1354,7 +1354,7 @@ def _solve_game_rational(
     rows: BellmanRows, callback: Callback | None, size_limit: int | None, t0: float,
     **float_options: Any,
 ) -> DPResult:  # fmt: skip
-    """``solve_game(..., arithmetic="rational")``: size check, float solve, exact strategy
+    """``solve_game(..., arithmetic="rational")``: the float solve, then exact strategy
     iteration on the rows as stored (their groups: the rows' (owner, action))."""
     from ..exact.files import rows_data
     from ..exact.fixed_point import game_fixed_point
@@ -1363,27 +1363,14 @@ def _solve_game_rational(
     _check_callback(callback)
     fl = solve_game(rows, **float_options)
     er = ExactRows.build(rows_data(rows), {"rows": "ROWS"})
-    fp = game_fixed_point(er, fl.values, callback=_exact_callback(callback),
-                          size_limit=size_limit, what="the game's variables")  # fmt: skip
-    values = fp.values.to_floats()
-    err = float(fp.values.max_abs_error(values))
-    tv, _ = rows.apply_maxmin(values)
-    return DPResult(
-        values=values,
-        policy=fp.policy,
-        policy_rows=fp.policy,
-        residual=float(np.abs(tv - values).max(initial=0.0)),
-        error_bound=float(np.nextafter(err, np.inf)) if err > 0 else 0.0,
-        tol=fl.tol,
-        iterations=fp.iterations,
-        sweeps=fl.sweeps,
-        seconds=time.perf_counter() - t0,
-        method="game-vi+exact-strategy-iteration",
-        status=Status.OPTIMAL,
-        history=list(fp.history),
-        rational_values=fp.values,
-        arithmetic="rational",
+    fp = game_fixed_point(
+        er,
+        fl.values,
+        callback=_exact_callback(callback),
+        size_limit=size_limit,
+        what="the game's variables",
     )
+    return _exact_result(rows, fp, fl, t0, "game-vi+exact-strategy-iteration")
 
 
 # ---------------------------------------------------------------------- evaluation
