@@ -84,7 +84,10 @@ def show(x: object) -> str:
     if isinstance(x, (int, Fraction)) and abs(Fraction(x)) >= 10**60:
         f = Fraction(x)
         bits = f"{f.numerator.bit_length()}-bit / {f.denominator.bit_length()}-bit"
-        return f"{float(f):.17g} (exact: {bits})"
+        try:
+            return f"{float(f):.17g} (exact: {bits})"
+        except OverflowError:
+            return f"{'-' if f < 0 else ''}huge (exact: {bits})"
     text = str(x)
     return text if len(text) <= 80 else text[:77] + "..."
 
