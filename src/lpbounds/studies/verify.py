@@ -934,9 +934,7 @@ def _exact_dual_bound(
         chosen = [int(r) for r in np.argsort(-y, kind="stable")[start : start + k]]
         if len(chosen) < k:
             return None
-        delta = solve_rational(
-            [[g[r][j] for r in chosen] for j in range(k)], [-t for t in resid]
-        )
+        delta = solve_rational([[g[r][j] for r in chosen] for j in range(k)], [-t for t in resid])
         if delta is None:
             continue
         yy = list(yf)
