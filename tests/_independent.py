@@ -506,9 +506,12 @@ def check_mdp_lp(
     n_blocks: int = 1,
     optimum: Reference | None = None,
     what: str = "",
+    row_terms: int = 0,
 ) -> str:
     """:func:`assert_bracket` for the LP of an MDP given as arrays, the operator and the
-    exact optimum computed here. ``kind``:
+    exact optimum computed here. ``row_terms``: terms summed in floating point to make a
+    row (added to the rounding allowance; SLP's surrogate rows sum ``|S_i| (L + 1)``).
+    ``kind``:
 
     * ``"ELP"`` (eq. 8): per state, ``V*`` by policy iteration;
     * ``"RLP"`` (eq. 9; also UBLP, and ``res.values`` of LLP): per partition ``labels``,
@@ -525,7 +528,7 @@ def check_mdp_lp(
     R = np.asarray(R, dtype=np.float64)
     n = P.shape[1]
     c = np.ones(n) if cost is None else np.asarray(cost, dtype=np.float64)
-    n_terms = int((P > 0).sum(axis=2).max(initial=1))
+    n_terms = int((P > 0).sum(axis=2).max(initial=1)) + int(row_terms)
     r_abs = float(np.abs(R[allowed]).max(initial=0.0))
     if kind in ("ELP", "ALP"):
         point = np.asarray(res.values if kind == "ELP" else res.state_values, dtype=np.float64)

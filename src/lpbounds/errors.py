@@ -35,3 +35,8 @@ class OutputError(LPBoundsError, OSError):
 
 class ConsistencyError(LPBoundsError, RuntimeError):
     """Two computations of the same quantity disagree: a defect, not a user error."""
+
+
+class SizeLimitError(ValidationError):
+    """A computation refused up front because the model exceeds a size limit (the message
+    names the size, the limit and the option that lifts it)."""

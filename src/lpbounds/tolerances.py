@@ -293,6 +293,23 @@ LP_VALUE_SCALE_MAX: float = 2.0**26
 LP_OBJECTIVE_MAX: float = 2.0**1016
 
 
+# ---------------------------------------------------------------------- exact arithmetic
+#: The most variables one dense exact (rational) solve accepts unless ``size_limit=`` says
+#: otherwise (:func:`lpbounds.exact.system.check_size`): the largest strongly connected
+#: component of a policy's graph, which exact policy evaluation solves as one dense block
+#: (:meth:`lpbounds.exact.system.ExactRows.solve_policy`), checked before it starts. Not a
+#: tolerance but a cost limit, measured (docs/benchmarks.md,
+#: "Exact arithmetic", 2 cores): exact ``V*`` of a random garnet (3 actions, 5 successors,
+#: one strongly connected policy graph: the worst case, one dense solve) took 1.8 s at 200
+#: states, 11 s at 400, 31 s at 600 and 73 s at 800 (time ~ n^3, the values' common
+#: denominator ~ 105 bits per state; memory stayed below 140 MB). 600 keeps one exact
+#: solve near half a minute, and a Ctrl-C waiting for the dense block in progress as long.
+#: Models whose policy graph splits into small components pass at any size and pay far
+#: less (taxi's 501 states: components of one state, 0.015 s against 0.65 s as one block;
+#: a patrol of 812 states: largest component 190, 0.15 s).
+EXACT_MAX_VARIABLES: int = 600
+
+
 # ---------------------------------------------------------------------- plots
 #: :func:`lpbounds.plot.bounds` circles a state whose ``V*`` lies outside a bound given as a
 #: plain array (no certified bracket to judge by) only beyond ``PLOT_BOUND_RTOL * max(1,

@@ -104,7 +104,9 @@ class TestLPBattery:
         # SLP(mu-bar) is the exact LP of its reduced MDP (Lemma 2): bracket on its V* = v*
         red_mdp = slp.reduced_mdp()
         red = ind.dense_transitions(red_mdp.successors, red_mdp.probabilities_full())
-        st = ind.check_mdp_lp(sres, "ELP", red, red_mdp.rewards, red_mdp.allowed, mdp.discount)
+        terms = int(part.sizes.max()) * (mdp.n_outcomes + 1)  # SLP.row_rounding's sums
+        st = ind.check_mdp_lp(sres, "ELP", red, red_mdp.rewards, red_mdp.allowed, mdp.discount,
+                              row_terms=terms)  # fmt: skip
         assert st == "optimal"
         # SLP's duals mapped back through h are again an optimal RLP dual: same objective
         rlp_obj = part.sizes @ vref

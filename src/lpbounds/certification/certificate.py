@@ -135,7 +135,7 @@ def dual_objective_bound(
     y: Any,
     lower: np.ndarray,
     upper: np.ndarray,
-    n_outcomes: int = 1,
+    row_rounding: float = 0.0,
 ) -> float:
     r"""A rigorous lower bound on ``c'v*`` from any multipliers ``y`` (weak duality on a box).
 
@@ -146,30 +146,21 @@ def dual_objective_bound(
 
     Rounding: ``|fl(A'y) - A'y| <= (k + 2) eps (|A|'y + |c|)`` with ``k`` the most entries
     of a column, ``|fl(b'y) - b'y| <= (R + 2) eps |b|'y``, the last sum is inflated by
-    ``(N + 3) eps`` relative. ``v*`` satisfies the exact rows ``E - lambda P`` of the stored
-    model, ``A v* >= b`` only up to the rounding of those rows into ``(A, b)``: each entry
-    of ``A`` is a product ``lambda p`` of a merged probability (a sum of at most ``L =
-    n_outcomes`` stored ones), subtracted from the owner's 1 on a self-loop, so its error
-    is relative to the magnitudes *before* that cancellation, ``|E| + lambda |P|``, not to
-    ``|A|``: at discount 0.99999 a self-loop's entry ``1 - lambda p`` is 1e-5 while its
-    error is ``eps``. Since ``lambda P <= |A| + E`` entry by entry and ``E`` has one 1 per
-    row, ``(|E| + lambda |P|) |v| <= |A| |v| + 2 max|v|``, so ``(max(k, L) + 3) eps y'(|b| +
-    |A| |v| + 2 max|v|)`` covers it. The bound is then rounded down. ``-inf`` when nothing
-    can be said (non-finite duals or box).
+    ``(N + 3) eps`` relative, and ``(k + 3) eps y'(|b| + |A| |v|)`` covers the rounding of
+    the rows into ``(A, b)`` (``v*`` satisfies the rows exactly, ``A v* >= b`` only up to
+    that); the bound is then rounded down. ``-inf`` when nothing can be said (non-finite
+    duals or box).
 
-    Parameters
-    ----------
-    A, b : sparse matrix, ndarray
-        The rows ``A v >= b`` (``A = E - lambda P`` as built from Bellman rows).
-    c : ndarray
-        The cost.
-    y : array_like
-        Any multipliers (negative entries are taken as 0).
-    lower, upper : ndarray
-        A certified box containing ``v*``.
-    n_outcomes : int
-        ``L``, the most stored probabilities merged into one entry of ``P`` (the row
-        system's ``n_outcomes``).
+    ``row_rounding`` (``rho``) covers what that last term cannot: rows whose stored ``(A,
+    b)`` are not the exact rows ``(A~, b~)`` the optimum satisfies beyond the rounding of
+    their own entries, i.e. ``sum_j |A_rj - A~_rj| <= 2 rho`` and ``|b_r - b~_r| <= rho
+    max|b|`` for every row: ``rho sum(y) (max|b| + 2 max|v|)`` is subtracted. Bellman rows
+    need it: ``A = E - lambda P`` is formed in floating point, and where a row reads its own
+    variable the entry ``1 - lambda p`` cancels (its rounding is ``eps`` of 1, not of
+    ``|1 - lambda p|``: at discount 0.9999 a self-loop's entry is ``1e-4`` and its relative
+    error ``1e-12``); aggregated rows also sum probabilities in floating point. Found by
+    exact arithmetic (tests/exact): an RLP at discount 0.9999 whose bound was ``1.5e-13``
+    relative above the exact optimum with ``rho = 0``.
     """
     yy = np.asarray(y, dtype=np.float64)
     if (
@@ -185,9 +176,10 @@ def dual_objective_bound(
     resid = np.abs(A.T @ yy - c) + (k + 2) * _EPS * (a_abs.T @ yy + np.abs(c))
     size = np.maximum(np.abs(lower), np.abs(upper))
     corr = float((resid * size).sum()) * (1.0 + (c.size + 3) * _EPS)
-    rows_gamma = (max(k, int(n_outcomes)) + 3) * _EPS
-    pre_cancel = np.abs(bb) + a_abs @ size + 2.0 * float(size.max(initial=0.0))
-    corr += rows_gamma * float(yy @ pre_cancel)
+    corr += (k + 3) * _EPS * float(yy @ (np.abs(bb) + a_abs @ size))
+    if row_rounding:
+        b_max, v_max = float(np.abs(bb).max(initial=0.0)), float(size.max(initial=0.0))
+        corr += float(row_rounding) * float(yy.sum()) * (b_max + 2.0 * v_max) * (1.0 + 8 * _EPS)
     by = float(bb @ yy) - (bb.size + 2) * _EPS * float(np.abs(bb) @ yy)
     out = by - corr - _TINY
     return float(np.nextafter(out, -np.inf)) if np.isfinite(out) else -float("inf")

@@ -109,17 +109,18 @@ def lp_objective_bracket(formulation: Any, result: Any, bracket: Bracket) -> tup
     ``c'v* = y'A v* - r'v* >= b'y - sum_j |r_j| max(|lower_j|, |upper_j|)`` (``v*`` lies in
     the bracket). This stays tight when ``c`` has zeros and the returned point is a
     non-unique optimum far from ``v*`` in the zero-cost entries (then ``c'lower`` is
-    loose). The rounding allowances, including that of the rows' rounding into ``(A, b)``
-    (relative to the magnitudes before a self-loop's cancellation ``1 - lambda p``), are
-    :func:`lpbounds.certification.certificate.dual_objective_bound`'s; every bound is then
-    rounded outward.
+    loose). Rounding: ``|fl(A'y) - A'y| <= (k + 2) eps (|A|'y + |c|)`` with ``k`` the most
+    entries of a column, ``|fl(b'y) - b'y| <= (R + 2) eps |b|'y``, the last sum is
+    inflated by ``(N + 3) eps`` relative, and ``(k + 3) eps y'(|b| + |A| |v|)`` covers the
+    rounding of the rows into ``(A, b)`` (``v*`` satisfies the rows exactly, ``A v* >= b``
+    only up to that); every bound is then rounded outward.
     """
     c = np.asarray(formulation.c, dtype=np.float64)
     lo, hi = objective_bracket(c, bracket.lower, bracket.upper)
     y = getattr(result, "duals", np.array([]))
     a, b = formulation.A, formulation.b
-    n_out = int(formulation.rows.n_outcomes)
-    return max(lo, dual_objective_bound(a, b, c, y, bracket.lower, bracket.upper, n_out)), hi
+    rho = float(getattr(formulation, "row_rounding", 0.0))  # stored rows vs exact ones
+    return max(lo, dual_objective_bound(a, b, c, y, bracket.lower, bracket.upper, rho)), hi
 
 
 def dp_interval(dp_result: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -109,7 +109,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -137,6 +137,10 @@ from ..validation import (
     check_vector,
     is_int,
 )
+
+if TYPE_CHECKING:  # annotations only: python-flint loads when exact arithmetic is asked for
+    from ..exact.fixed_point import ExactFixedPoint
+    from ..exact.rationals import RationalVector
 
 __all__ = [
     "DPResult",
@@ -325,6 +329,14 @@ class DPResult(Result):
         are still valid, only wider).
     history : list of float
         The residual at each improvement step.
+    rational_values : RationalVector or None
+        ``arithmetic="rational"`` only: the exact fixed point of the stored model, a
+        sequence of :class:`~fractions.Fraction` (one per state; made on first access,
+        numerators over one common denominator until then: see
+        :class:`lpbounds.exact.rationals.RationalVector`). ``values`` are then their
+        nearest doubles and ``error_bound`` their exact distance from it, rounded up.
+    arithmetic : str
+        ``"float"`` or ``"rational"``.
     lower_values, upper_values : ndarray
         The certified bracket ``lower_values <= V* <= upper_values`` (properties, see
         :attr:`lower_values`).
@@ -346,6 +358,8 @@ class DPResult(Result):
     method: str
     status: Status
     history: list[float] = field(default_factory=list)
+    rational_values: RationalVector | None = None
+    arithmetic: str = "float"
 
     @property
     def converged(self) -> bool:
@@ -577,8 +591,10 @@ def solve_exact(
     evaluation: Literal["auto", "direct", "iterative"] = "auto",
     callback: Callback | None = None,
     raise_on_failure: bool = True,
+    arithmetic: Literal["float", "rational"] = "float",
+    size_limit: int | None = None,
 ) -> DPResult:
-    """Solve Bellman's equation (eq. 3) to a stated residual.
+    """Solve Bellman's equation (eq. 3) to a stated residual, or exactly.
 
     Parameters
     ----------
@@ -616,6 +632,22 @@ def solve_exact(
     raise_on_failure : bool
         Raise :class:`~lpbounds.errors.ConvergenceError` at ``max_iter`` (default);
         otherwise return with ``status=Status.ITERATION_LIMIT`` (``converged=False``).
+    arithmetic : {"float", "rational"}
+        ``"rational"``: the stored model's exact ``V*`` (every double taken as the exact
+        rational it is). The float solve runs first, as with ``"float"``, and its greedy
+        policy starts exact policy iteration (:func:`lpbounds.exact.least_fixed_point`:
+        rational evaluations, improvements checked exactly, verified by the certificate
+        checker). The result's ``rational_values`` hold ``V*``, ``values`` its nearest
+        doubles, ``error_bound`` their exact distance rounded up, ``residual`` the float
+        residual of ``values``, ``policy`` an exactly optimal policy, ``iterations`` the
+        exact evaluations; ``callback(iteration, residual)`` is called after each exact
+        improvement check with its exact residual (0 at the end). The float path is
+        unchanged by this option.
+    size_limit : int, optional
+        ``arithmetic="rational"``: the most states solved together (default
+        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`): the largest strongly connected
+        component of the float solve's policy, checked before any exact work (a model
+        whose policy graph is a chain of small components passes at any size).
 
     Returns
     -------
@@ -627,11 +659,21 @@ def solve_exact(
         For a bad argument (checked once, before the first sweep): ``tol`` not a
         positive finite number, ``initial`` of the wrong length or with a NaN/inf
         entry, a non-integer ``max_iter``, an ``eval_sweeps`` neither a non-negative
-        integer nor ``"auto"``, an unknown method.
+        integer nor ``"auto"``, an unknown method or arithmetic.
+    SizeLimitError
+        ``arithmetic="rational"``: a policy component of more than ``size_limit`` states
+        (after the float solve, before any exact work).
     ConvergenceError
         At ``max_iter`` with ``raise_on_failure``; or if the iterates overflow.
     """
     t0 = time.perf_counter()
+    check_choice("arithmetic", arithmetic, ("float", "rational"))
+    if arithmetic == "rational":
+        return _solve_rational(
+            model, callback, size_limit, t0, method, tol=tol, max_iter=max_iter,
+            eval_sweeps=eval_sweeps, extrapolate=extrapolate, initial=initial,
+            evaluation=evaluation, raise_on_failure=raise_on_failure,
+        )  # fmt: skip
     if method not in ("mpi", "vi", "pi", "ipi"):
         raise ValidationError(f"unknown method {method!r}; use 'mpi', 'vi', 'pi' or 'ipi'")
     max_iter = check_int("max_iter", max_iter, lo=1)
@@ -669,6 +711,79 @@ def solve_exact(
         method, _policy_out(model, rows, run.arg), run.arg, tol_, modulus(rows), t0,
         raise_on_failure,
     )  # fmt: skip
+
+
+def _exact_model(model: Model) -> tuple[dict[str, Any], dict[str, Any], str]:
+    """The certificate model data, the rows' spec and their name (for the size error)."""
+    from ..exact.files import mdp_data, rows_data
+
+    if isinstance(model, FiniteMDP):
+        return mdp_data(model), {"rows": "ELP"}, "the MDP's states"
+    if isinstance(model, BellmanRows):
+        return rows_data(model), {"rows": "ROWS"}, "the row system's variables"
+    raise ValidationError(f"expected a FiniteMDP or BellmanRows; got {type(model).__name__}")
+
+
+def _exact_result(
+    model: Model, fp: ExactFixedPoint, fl: DPResult, t0: float, method: str
+) -> DPResult:
+    """The DPResult of an exact fixed point: ``values`` its nearest doubles, ``error_bound``
+    their exact distance from it rounded up, ``residual`` the float residual of ``values``
+    (of ``T``, or of the game's ``G`` when ``fp.game``)."""
+    values = fp.values.to_floats()
+    err = float(fp.values.max_abs_error(values))  # rounded to nearest: one step up covers it
+    rows = exact_rows(model)
+    tv, _ = rows.apply_maxmin(values) if fp.game else rows.apply_max(values)
+    return DPResult(
+        values=values,
+        policy=fp.policy if fp.game else _policy_out(model, rows, fp.policy),
+        policy_rows=fp.policy,
+        residual=float(np.abs(tv - values).max(initial=0.0)),
+        error_bound=float(np.nextafter(err, np.inf)) if err > 0 else 0.0,
+        tol=fl.tol,
+        iterations=fp.iterations,
+        sweeps=fl.sweeps,
+        seconds=time.perf_counter() - t0,
+        method=method,
+        status=Status.OPTIMAL,
+        history=list(fp.history),
+        rational_values=fp.values,
+        arithmetic="rational",
+    )
+
+
+def _exact_callback(callback: Callback | None) -> Callable[[Any], None] | None:
+    """The exact engine's progress events as ``callback(iteration, residual)`` calls (one
+    per exact improvement check)."""
+    if callback is None:
+        return None
+
+    def relay(event: Any) -> None:
+        if event.stage == "improve":
+            callback(event.iteration, event.residual)
+
+    return relay
+
+
+def _solve_rational(
+    model: Model,
+    callback: Callback | None,
+    size_limit: int | None,
+    t0: float,
+    method: Method,
+    **float_options: Any,
+) -> DPResult:
+    """``solve_exact(..., arithmetic="rational")``: the float solve, then exact PI."""
+    from ..exact.fixed_point import least_fixed_point
+    from ..exact.system import ExactRows
+
+    _check_callback(callback)
+    data, spec, what = _exact_model(model)
+    fl = solve_exact(model, method, **float_options)
+    rows = ExactRows.build(data, spec)
+    fp = least_fixed_point(rows, fl.policy_rows, callback=_exact_callback(callback),
+                           size_limit=size_limit, what=what)  # fmt: skip
+    return _exact_result(model, fp, fl, t0, f"{fl.method}+exact-pi")
 
 
 def check_eval_sweeps(eval_sweeps: Any) -> int | Literal["auto"]:
@@ -1196,6 +1311,8 @@ def solve_game(
     initial: Any = None,
     callback: Callback | None = None,
     raise_on_failure: bool = True,
+    arithmetic: Literal["float", "rational"] = "float",
+    size_limit: int | None = None,
 ) -> DPResult:
     r"""Fixed point of ``(Gw)(i) = max_u min_{r in (i, u)} q_r(w)`` (Fact 2, :mod:`lpbounds.rows`).
 
@@ -1205,6 +1322,12 @@ def solve_game(
     state of the partition. Value iteration with the Porteus shift (valid for ``G``:
     monotone, and ``G(w + c) = Gw + lambda c``); stops when ``||Gw - w||_inf <= tol``.
 
+    With ``arithmetic="rational"`` the float value iteration runs first and starts exact
+    strategy iteration (:func:`lpbounds.exact.game_fixed_point`) on the rows as stored
+    (each double taken exactly); the result is as :func:`solve_exact`'s with
+    ``arithmetic="rational"`` (``rational_values``, exact ``error_bound``), ``size_limit``
+    the most variables solved together.
+
     Returns
     -------
     DPResult
@@ -1213,6 +1336,10 @@ def solve_game(
     t0 = time.perf_counter()
     if not isinstance(rows, BellmanRows):
         raise ValidationError(f"rows must be a BellmanRows system; got {type(rows).__name__}")
+    check_choice("arithmetic", arithmetic, ("float", "rational"))
+    if arithmetic == "rational":
+        return _solve_game_rational(rows, callback, size_limit, t0, tol=tol, max_iter=max_iter,
+                                    initial=initial, raise_on_failure=raise_on_failure)  # fmt: skip
     tol_ = _default_tol(rows, tol)
     max_iter = check_int("max_iter", max_iter, lo=1)
     raise_on_failure = check_bool("raise_on_failure", raise_on_failure)
@@ -1220,6 +1347,29 @@ def solve_game(
     v = _initial(initial, rows.n_vars)
     run = mpi_loop(rows, v, tol_, max_iter, 0, True, callback, game=True)
     return run.finish("game-vi", run.arg, run.arg, tol_, modulus(rows), t0, raise_on_failure)
+
+
+def _solve_game_rational(
+    rows: BellmanRows, callback: Callback | None, size_limit: int | None, t0: float,
+    **float_options: Any,
+) -> DPResult:  # fmt: skip
+    """``solve_game(..., arithmetic="rational")``: the float solve, then exact strategy
+    iteration on the rows as stored (their groups: the rows' (owner, action))."""
+    from ..exact.files import rows_data
+    from ..exact.fixed_point import game_fixed_point
+    from ..exact.system import ExactRows
+
+    _check_callback(callback)
+    fl = solve_game(rows, **float_options)
+    er = ExactRows.build(rows_data(rows), {"rows": "ROWS"})
+    fp = game_fixed_point(
+        er,
+        fl.values,
+        callback=_exact_callback(callback),
+        size_limit=size_limit,
+        what="the game's variables",
+    )
+    return _exact_result(rows, fp, fl, t0, "game-vi+exact-strategy-iteration")
 
 
 # ---------------------------------------------------------------------- evaluation

@@ -15,7 +15,7 @@ it, so Theorem 1's special structure can be seen by contrast.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cvxpy as cp
 import numpy as np
@@ -28,6 +28,9 @@ from ..model.checks import check_formulation_inputs
 from ..model.mdp import FiniteMDP
 from ..tolerances import ALP_COST_DEPENDENCE_RTOL
 from .base import Formulation, LPResult, check_cost
+
+if TYPE_CHECKING:  # annotations only
+    from ..exact.lp import ExactLP
 
 __all__ = ["ALP", "CostDependenceExample", "find_cost_dependent_alp", "soft_aggregation_basis"]
 
@@ -124,6 +127,8 @@ class ALP(Formulation):
         self.mdp = mdp
         self.basis = _check_basis(basis, mdp.n_states)
         c = check_cost(cost, mdp.n_states)
+        #: the per-state cost ``c`` (the LP's is ``Phi'c``, summed in floating point)
+        self.state_cost = c
         self.rows = exact_rows(mdp)
         a_exact, b = self.rows.constraint_matrix()
         super().__init__(
@@ -152,6 +157,35 @@ class ALP(Formulation):
         self, x: np.ndarray, y: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
         return x, np.asarray(self.basis @ x).ravel(), self.rows.pair_values(y), {}
+
+    # ------------------------------------------------------------------ exact arithmetic
+    def exact_size(self) -> tuple[int, str]:
+        """The MDP's states: the bracket of a float solve is on ``V*``, solved exactly to
+        judge it (the simplex itself works on the ``K`` weights)."""
+        return self.mdp.n_states, "ALP's states (V*)"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 10 with this basis, built by the checker from the MDP, the
+        basis and the per-state cost (``Phi'c`` summed exactly)."""
+        from ..exact.files import mdp_data
+
+        phi = [[float(t).hex() for t in row] for row in self.basis.toarray()]
+        lp = {"formulation": "ALP", "basis": phi,
+              "state_cost": [float(t).hex() for t in self.state_cost]}  # fmt: skip
+        return mdp_data(self.mdp), lp
+
+    def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
+        """The exact simplex method from the solver's ``r`` (exact.lp's ``simplex_lp``)."""
+        from ..exact.lp import simplex_lp
+
+        model, spec = self.exact_lp()
+        return simplex_lp(model, spec, approx=approx, size_limit=size_limit, what="ALP's weights")
+
+    def _exact_bracket_target(self, exact: ExactLP, size_limit: int | None) -> Any:
+        """ALP's bracket is on ``V*`` itself (the class notes): solved exactly."""
+        from ..dp import solve_exact
+
+        return solve_exact(self.mdp, arithmetic="rational", size_limit=size_limit).rational_values
 
     def _certify(self, x: np.ndarray) -> Certificate:
         """The bracket on ``V*`` from the state values ``Phi r`` (see the class notes)."""

@@ -43,10 +43,11 @@ only where it still applies (see :meth:`Formulation.solve`).
 
 from __future__ import annotations
 
+import copy
 import time
 import warnings
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cvxpy as cp
 import numpy as np
@@ -56,7 +57,7 @@ from ..certification.certificate import Certificate, contraction_modulus, dual_o
 from ..errors import SolverError, SolverNotInstalledError, ValidationError
 from ..status import Status
 from ..tolerances import LP_CERT_RTOL, LP_DATA_BAND, LP_OBJECTIVE_MAX, LP_VALUE_SCALE_MAX
-from ..validation import as_float_array, check_bool, check_int, check_real
+from ..validation import as_float_array, check_bool, check_choice, check_int, check_real
 from .highs import (
     CvxpyHighs,
     pass_lp,
@@ -69,6 +70,9 @@ from .highs import (
     status_of,
 )
 from .results import LPResult
+
+if TYPE_CHECKING:  # annotations only: python-flint loads when exact arithmetic is asked for
+    from ..exact.lp import ExactLP
 
 # HiGHS prints its banner on stdout the first time a process constructs a Highs object,
 # whatever the options (cvxpy passes log_to_console=verbose only afterwards). Nothing
@@ -696,6 +700,14 @@ class Formulation:
             "positive multiple of the cost gives the same optimal point)"
         )
 
+    @property
+    def row_rounding(self) -> float:
+        """A bound ``rho`` on how far the stored rows ``(A, b)`` are from the exact rows of
+        the LP they stand for, relative (see
+        :func:`~lpbounds.certification.certificate.dual_objective_bound`): 0 here, where the
+        data is the LP."""
+        return 0.0
+
     def _rows_contract(self) -> bool:
         """Whether the row system behind the structural flags (``self.rows``, where the
         formulation has one) contracts, ``kappa = lambda max_r sum_l p_rl < 1``: rows may sum
@@ -921,6 +933,8 @@ class Formulation:
         raise_on_failure: bool = True,
         verbose: bool = False,
         extra_constraints: Any = None,
+        arithmetic: str = "float",
+        size_limit: int | None = None,
         **solver_options: Any,
     ) -> LPResult:
         """Solve with ``solver`` (any installed cvxpy LP solver) and certify the result.
@@ -958,6 +972,18 @@ class Formulation:
             ``==`` on this formulation's :attr:`variables` (``v[i] <= v[j]``, ...), added
             to :attr:`problem` for this solve only (:meth:`modified_problem`; the
             formulation itself is not changed). See "Modified problems" below.
+        arithmetic : {"float", "rational"}
+            ``"rational"``: after the solve, also the LP's exact optimum on the stored
+            model (each double taken as the exact rational it is) with an exact primal
+            point and an exact dual that prove it, checked in rationals; the float answer
+            stays as it was and ``result.exact`` (:class:`lpbounds.exact.lp.ExactLP`) holds
+            the exact one, the solver's exact error and whether its certified bracket held
+            (:meth:`exact_optimum`). ELP, RLP, SLP, IB, ALP, LLP, UBLP and LBLP have it
+            (and any :class:`~lpbounds.formulations.RowsLP`); not with
+            ``extra_constraints``.
+        size_limit : int, optional
+            ``arithmetic="rational"``: the most variables one dense exact solve takes
+            (default :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`; :meth:`exact_optimum`).
         **solver_options
             Passed to the solver through cvxpy. HiGHS' own ``solver`` option clashes
             with this method's ``solver`` argument, so HiGHS options go in a dict:
@@ -1028,6 +1054,14 @@ class Formulation:
         verbose = check_bool("verbose", verbose)
         _check_common_options(solver_options)
         extras = self._check_extras(extra_constraints)
+        check_choice("arithmetic", arithmetic, ("float", "rational"))
+        if arithmetic == "rational":
+            if extras:
+                raise ValidationError(
+                    "arithmetic='rational' solves the formulation's own LP: not with "
+                    "extra_constraints"
+                )
+            self.exact_size()  # no exact route: refused before the solver runs
         name = resolve_solver(solver)
         route = self._backend(backend, name, warm_start, extras)
         self._check_representable()
@@ -1055,7 +1089,91 @@ class Formulation:
                 f"residual {result.primal_residual:.3e}, dual residual "
                 f"{result.dual_residual:.3e}, gap {result.gap:.3e}"
             )
+        if arithmetic == "rational":
+            result.exact = self.exact_optimum(result, size_limit=size_limit)
         return result
+
+    # ------------------------------------------------------------------ exact arithmetic
+    def exact_size(self) -> tuple[int, str]:
+        """``(variables, what)``: the variables of the exact system :meth:`exact_optimum`
+        solves and its name (the words of a size error).
+
+        Raises
+        ------
+        ValidationError
+            Here: a formulation without an exact route (a plain :class:`Formulation`); called
+            before the solver runs, so such a request fails before any work.
+        """
+        raise ValidationError(
+            f"{self.name} has no exact route: arithmetic='rational' is implemented for ELP, "
+            "RLP, SLP, IB, ALP, LLP, UBLP, LBLP and any RowsLP"
+        )
+
+    def exact_optimum(
+        self,
+        result: LPResult | None = None,
+        *,
+        size_limit: int | None = None,
+        callback: Any = None,
+    ) -> ExactLP:
+        """The LP's exact optimum and the exact primal and dual that prove it.
+
+        Parameters
+        ----------
+        result : LPResult, optional
+            A float solve of this LP: its point chooses where the exact computation starts
+            (it decides nothing), and the returned ExactLP records its exact error and
+            whether its certified bracket held (:meth:`ExactLP.judge
+            <lpbounds.exact.lp.ExactLP.judge>`).
+        size_limit : int, optional
+            The most variables one dense exact solve takes (default
+            :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`): a policy's largest strongly
+            connected component, checked before it is solved.
+        callback : callable(ExactProgress), optional
+            Progress of the exact computation (:class:`lpbounds.exact.system.ExactProgress`).
+
+        Returns
+        -------
+        ExactLP
+
+        Raises
+        ------
+        SizeLimitError
+            Above ``size_limit`` (before the exact solve).
+        ValidationError
+            For a formulation without an exact route.
+        """
+        self.exact_size()
+        approx = None if result is None else result.x
+        exact = self._exact_route(approx, size_limit, callback)
+        if result is not None:
+            exact = self.judge_exact(exact, result, size_limit=size_limit)
+        return exact
+
+    def judge_exact(
+        self, exact: ExactLP, result: LPResult, *, size_limit: int | None = None
+    ) -> ExactLP:
+        """A copy of ``exact`` (this LP's exact optimum) judging the float ``result``: its
+        exact error and whether its certified bracket held (on what the bracket is about:
+        the optimum, or ``V*`` for ALP, RLP's ``v*`` for LLP)."""
+        out = copy.copy(exact)
+        out.judge(
+            result.values,
+            result.lower_values,
+            result.upper_values,
+            result.objective,
+            self._exact_bracket_target(exact, size_limit),
+        )
+        return out
+
+    def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
+        """The exact optimum (hook; :meth:`exact_size` refuses where there is none)."""
+        raise NotImplementedError
+
+    def _exact_bracket_target(self, exact: ExactLP, size_limit: int | None) -> Any:
+        """What the float result's certified bracket is about (hook): the exact optimum's
+        ``values`` (``None``) unless the formulation's bracket is on something else."""
+        return None
 
     def _run(
         self,
@@ -1102,10 +1220,8 @@ class Formulation:
         if cert is not None:
             lower, upper, bracket = self._bracket(cert)
             if bracket is not None and run.y is not None:
-                rows = getattr(self, "rows", None)
-                n_out = 1 if rows is None else int(rows.n_outcomes)
                 dual_lo = dual_objective_bound(
-                    self.A, self.b, self.c, y, cert.lower, cert.upper, n_out
+                    self.A, self.b, self.c, y, cert.lower, cert.upper, self.row_rounding
                 )
                 bracket = (max(bracket[0], dual_lo), bracket[1])
             tol = accuracy * cert.reward_absmax

@@ -70,6 +70,16 @@ class ELP(RowsLP):
         self.mdp = mdp
         super().__init__(exact_rows(mdp), cost)
 
+    def exact_size(self) -> tuple[int, str]:
+        """The MDP's states (:meth:`Formulation.exact_size`)."""
+        return self.mdp.n_states, "ELP's states"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 8 built by the checker from the MDP's stored doubles."""
+        from ..exact.files import mdp_data
+
+        return mdp_data(self.mdp), {"formulation": "ELP", "cost": self.exact_cost()}
+
     @property
     def V(self) -> cp.Variable:
         """The cvxpy variable ``V`` (one entry per state)."""

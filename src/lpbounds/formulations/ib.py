@@ -7,7 +7,7 @@ every feasible point of either LP has ``v_j >= v*`` (each block, for IB) or ``v 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cvxpy as cp
 import numpy as np
@@ -22,6 +22,9 @@ from ..rows import BellmanRows
 from ..validation import check_allocation
 from .base import Formulation, check_cost
 from .rows_lp import RowsLP
+
+if TYPE_CHECKING:  # annotations only
+    from ..exact.lp import ExactLP
 
 __all__ = ["IB", "LLP"]
 
@@ -138,6 +141,26 @@ class IB(RowsLP):
 
         v = solve_exact(self.base_rows, tol=tol).values
         return np.tile(v, (self.L, 1))
+
+    # ------------------------------------------------------------------ exact arithmetic
+    def exact_size(self) -> tuple[int, str]:
+        """RLP's partitions: IB's exact optimum is ``(v*, ..., v*)`` from one RLP solve."""
+        return self.partition.n_partitions, "IB's partitions (RLP's fixed point)"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 20-22 built by the checker from the MDP and the partition."""
+        from ..exact.files import mdp_data
+
+        model = mdp_data(self.mdp, self.partition)
+        return model, {"formulation": "IB", "L": self.L, "cost": self.exact_cost()}
+
+    def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
+        """RLP's exact fixed point in every block and the cyclic policy's duals."""
+        from ..exact.lp import ib_lp
+
+        model, _ = self.exact_lp()
+        return ib_lp(model, self.L, list(self.c), approx=approx, callback=callback,
+                     size_limit=size_limit)  # fmt: skip
 
 
 def _check_lift_size(L: int, rows: BellmanRows) -> None:
@@ -350,3 +373,36 @@ class LLP(Formulation):
         from ..dp import solve_exact
 
         return solve_exact(self.rows, tol=tol).values
+
+    # ------------------------------------------------------------------ exact arithmetic
+    def exact_size(self) -> tuple[int, str]:
+        """The partitions (the reduced LP's variables, :func:`lpbounds.exact.lp.llp_lp`)."""
+        return self._m, "LLP's partitions"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 18 with surplus lifting, built by the checker from the MDP,
+        the partition, ``c-bar`` and ``d`` over the allowed pairs (each double exact)."""
+        from ..exact.files import mdp_data
+
+        xs, us = self.pairs[:, 0], self.pairs[:, 1]
+        lp = {
+            "formulation": "LLP",
+            "cost": [float(t).hex() for t in self.c[: self._m]],
+            "d": [float(t).hex() for t in self.d[xs, us]],
+        }
+        return mdp_data(self.mdp, self.partition), lp
+
+    def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
+        """Eliminate ``z``: RLP's fixed point when ``c-bar + A'd >= 0``, else the exact
+        simplex from it (:func:`lpbounds.exact.lp.llp_lp`)."""
+        from ..exact.lp import llp_lp
+
+        model, spec = self.exact_lp()
+        v0 = None if approx is None else np.asarray(approx)[: self._m]
+        return llp_lp(model, spec["cost"], spec["d"], approx=v0, callback=callback,
+                      size_limit=size_limit)  # fmt: skip
+
+    def _exact_bracket_target(self, exact: ExactLP, size_limit: int | None) -> Any:
+        """LLP's bracket is on RLP's ``v*`` (:meth:`_certify`)."""
+        assert exact.fixed_point is not None
+        return exact.fixed_point.values

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -11,6 +11,9 @@ from ..certification.certificate import Certificate
 from ..results import Result
 from ..status import Status
 from ..tolerances import LP_CERT_RTOL
+
+if TYPE_CHECKING:  # annotations only
+    from ..exact.lp import ExactLP
 
 __all__ = ["LPResult"]
 
@@ -97,6 +100,10 @@ class LPResult(Result):
         Modified solves only: the duality gap of the modified LP from all the duals,
         ``|c'x - D| + ||r||_1 max|x|`` (``D`` the Lagrangian dual value, ``r`` the
         stationarity residual; see :meth:`Formulation.solve`); ``nan`` otherwise.
+    exact : ExactLP or None
+        ``solve(..., arithmetic="rational")`` only: the LP's exact optimum with the exact
+        primal and dual that prove it, the solver's exact error and whether its certified
+        bracket held (:class:`lpbounds.exact.lp.ExactLP`).
     """
 
     formulation: str
@@ -128,6 +135,7 @@ class LPResult(Result):
     extra_residuals: tuple[float, ...] = ()
     extra_duals: tuple[np.ndarray, ...] = ()
     kkt_gap: float = float("nan")
+    exact: ExactLP | None = None
 
     @property
     def relative_error(self) -> float:

@@ -87,6 +87,19 @@ class RLP(RowsLP):
             rows = BellmanRows.aggregate(mdp, partition, reduce="max")
         super().__init__(rows, cbar)
 
+    def exact_size(self) -> tuple[int, str]:
+        """The partitions (:meth:`Formulation.exact_size`)."""
+        return self.partition.n_partitions, "RLP's partitions"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 9 built by the checker from the MDP and the partition, one
+        row per allowed pair with its probabilities summed by target partition exactly
+        (the float rows merge them in floating point)."""
+        from ..exact.files import mdp_data
+
+        model = mdp_data(self.mdp, self.partition)
+        return model, {"formulation": "RLP", "cost": self.exact_cost()}
+
     @property
     def v(self) -> cp.Variable:
         """The cvxpy variable ``v`` (one entry per partition)."""

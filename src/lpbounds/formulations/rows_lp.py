@@ -10,7 +10,7 @@ into a certified bracket on that optimum (the result's ``lower_values``/``upper_
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -19,6 +19,9 @@ from ..dp import solve_exact
 from ..rows import BellmanRows
 from .base import Formulation, check_cost
 from .highs import tight_basis
+
+if TYPE_CHECKING:  # annotations only
+    from ..exact.lp import ExactLP
 
 __all__ = ["RowsLP"]
 
@@ -77,6 +80,15 @@ class RowsLP(Formulation):
         mu = self.rows.pair_values(y) if self.rows.pair_row is not None else None
         return x, None, mu, {}
 
+    @property
+    def row_rounding(self) -> float:
+        """``2 (L + 3) eps``: the rows' ``A = E - lambda P`` is formed in floating point (the
+        owner's ``1 - lambda p`` cancels where a row reads its own variable: an error of
+        ``eps``, not of ``eps |1 - lambda p|``), and aggregated rows sum up to ``L``
+        probabilities per target, so ``sum_j |A_rj - A~_rj| <= (L + 2) eps (1 + lambda s_r)``
+        against the exact rows; the rewards are stored exactly."""
+        return 2.0 * (self.rows.n_outcomes + 3) * float(np.finfo(np.float64).eps)
+
     def _certify(self, x: np.ndarray) -> Certificate:
         """The bracket on the exact optimum (the least feasible point) from ``x`` alone."""
         return certify(self.rows, x)
@@ -118,3 +130,29 @@ class RowsLP(Formulation):
     def fixed_point(self, tol: float | None = None) -> np.ndarray:
         """The exact optimum, solver-free: the fixed point of ``max`` over the rows (Fact 1)."""
         return solve_exact(self.rows, tol=tol).values
+
+    # ------------------------------------------------------------------ exact arithmetic
+    def exact_size(self) -> tuple[int, str]:
+        """The variables of the exact fixed point (:meth:`Formulation.exact_size`)."""
+        return self.rows.n_vars, f"{self.name}'s variables"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: this LP as the certificate describes it (the rows as stored,
+        each double exact: ``{"formulation": "ROWS"}``; ELP, RLP, SLP rebuild theirs from
+        the MDP in exact arithmetic)."""
+        from ..exact.files import rows_data
+
+        return rows_data(self.rows), {"formulation": "ROWS", "cost": self.exact_cost()}
+
+    def exact_cost(self) -> list[str]:
+        """The LP's cost as stored (each double exact, as hex)."""
+        return [float(t).hex() for t in self.c]
+
+    def _exact_route(self, approx: Any, size_limit: int | None, callback: Any) -> ExactLP:
+        """The rows' exact least fixed point and its policy's occupation measure."""
+        from ..exact.lp import bellman_lp
+
+        model, spec = self.exact_lp()
+        _, what = self.exact_size()
+        return bellman_lp(model, spec, approx=approx, callback=callback, size_limit=size_limit,
+                          what=what)  # fmt: skip

@@ -52,12 +52,14 @@ partition in that case instead of building an unbounded LP.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import cvxpy as cp
 import numpy as np
 import scipy.sparse as sp
 
+from ..certification.certificate import Certificate
 from ..errors import ValidationError
 from ..model.checks import check_formulation_inputs
 from ..model.mdp import FiniteMDP
@@ -206,6 +208,57 @@ class SLP(RowsLP):
         return FiniteMDP(succ, probs, rewards, self.mdp.discount, allowed, self.mdp.action_names)
 
     @property
+    def row_rounding(self) -> float:
+        """``rho = (2 s (L + 1) + 8) eps``: the surrogate rows are computed in floating point,
+        ``h = mu / sum mu`` and sums over a partition's states (``s`` the largest partition,
+        ``L`` outcomes each) of ``h p`` and ``h R``; against the exact rows of eq. 12 (SLPB)
+        every reward is within ``(2 s + 4) eps max|R|`` and every row's probabilities within
+        ``(s L + s + 4) eps`` in sum, so ``|q_r(v) - q~_r(v)| <= rho (max|R| + max|v|)``
+        (:meth:`RowsLP.row_rounding <lpbounds.formulations.RowsLP.row_rounding>`)."""
+        eps = float(np.finfo(np.float64).eps)
+        size = int(self.partition.sizes.max(initial=1))
+        return (2.0 * size * (self.mdp.n_outcomes + 1) + 8.0) * eps
+
+    def _certify(self, x: np.ndarray) -> Certificate:
+        """The certificate of the computed rows, widened to the exact rows of eq. 12.
+
+        With ``rho`` = :attr:`row_rounding` the two row systems' operators differ by at most
+        ``rho (max|R| + max|v|)`` at any ``v``; so their fixed points ``v_f`` (computed
+        rows) and ``v~`` (exact) satisfy ``D = ||v~ - v_f|| <= rho (max|R| + B + D) / (1 -
+        kappa)`` with ``B`` bounding ``|v_f|`` (the computed bracket's ends), i.e. ``D <=
+        rho (max|R| + B) / (1 - kappa - rho)``, added to both sides (rounded up)."""
+        cert = super()._certify(x)
+        if not np.isfinite(cert.error_bound):
+            return cert
+        eps = float(np.finfo(np.float64).eps)
+        rho = self.row_rounding
+        big = float(np.maximum(np.abs(cert.lower), np.abs(cert.upper)).max(initial=0.0))
+        den = (1.0 - cert.modulus - rho) * (1.0 - 4.0 * eps)
+        widen = rho * (cert.reward_absmax + big) / den * (1.0 + 8.0 * eps)
+        return dataclasses.replace(
+            cert,
+            lower=np.nextafter(cert.lower - widen, -np.inf),
+            upper=np.nextafter(cert.upper + widen, np.inf),
+            error_bound=float(np.nextafter(cert.error_bound + widen, np.inf)),
+            margin=cert.margin + widen * (1.0 - cert.modulus),
+        )
+
+    def exact_size(self) -> tuple[int, str]:
+        """The partitions (:meth:`Formulation.exact_size`)."""
+        return self.partition.n_partitions, "SLP's partitions"
+
+    def exact_lp(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        """``(model, lp)``: eq. 12 built by the checker from the MDP, the partition and
+        ``mu`` (each double exact) in its unnormalised form: the same feasible set as the
+        normalised rows (eq. SLPB) the float LP holds, without their rounding."""
+        from ..exact.files import mdp_data
+        from ..exact.rationals import RationalVector
+
+        model = mdp_data(self.mdp, self.partition)
+        mu = RationalVector.from_fractions(self.mu[self.mdp.allowed]).to_json()
+        return model, {"formulation": "SLP", "cost": self.exact_cost(), "mu": mu}
+
+    @property
     def v(self) -> cp.Variable:
         """The cvxpy variable ``v`` (one entry per partition)."""
         return self.variables["v"]
@@ -263,8 +316,8 @@ def _surrogate_rows(
     pos = np.arange(ptil.nnz) - ptil.indptr[row_idx]
     targets[row_idx, pos] = ptil.indices
     probs[row_idx, pos] = ptil.data
-    # renormalise against round-off in the sums of h * p
-    probs /= probs.sum(axis=1, keepdims=True)
+    # no renormalisation: a row summing to 1 + 9e-10 in the model keeps that sum here (the
+    # stored model's SLP; its round-off is covered by SLP.row_rounding in the certificate)
     rows = BellmanRows.from_arrays(
         owner, live % n_actions, reward[live], targets, probs, mdp.discount, m
     )

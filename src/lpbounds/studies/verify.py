@@ -97,6 +97,7 @@ from ..certification.checks import (
 )
 from ..dp import exact_rows, solve_exact
 from ..errors import ConvergenceError, LPBoundsError, ValidationError
+from ..exact.rationals import solve_rational
 from ..formulations import (
     ELP,
     IB,
@@ -972,22 +973,6 @@ def _exact_alp_data(
     return g, b, c_phi
 
 
-def _solve_exact_system(mat: list[list[Fraction]], rhs: list[Fraction]) -> list[Fraction] | None:
-    """Gauss-Jordan elimination in rationals; None if singular."""
-    n = len(rhs)
-    aug = [[*list(mat[i]), rhs[i]] for i in range(n)]
-    for col in range(n):
-        piv = next((i for i in range(col, n) if aug[i][col] != 0), None)
-        if piv is None:
-            return None
-        aug[col], aug[piv] = aug[piv], aug[col]
-        for i in range(n):
-            if i != col and aug[i][col] != 0:
-                f = aug[i][col] / aug[col][col]
-                aug[i] = [a - f * p for a, p in zip(aug[i], aug[col], strict=True)]
-    return [aug[i][n] / aug[i][i] for i in range(n)]
-
-
 def _exact_dual_bound(
     g: list[list[Fraction]], b: list[Fraction], c_phi: list[Fraction], y: np.ndarray
 ) -> Fraction | None:
@@ -1002,9 +987,7 @@ def _exact_dual_bound(
         chosen = [int(r) for r in np.argsort(-y, kind="stable")[start : start + k]]
         if len(chosen) < k:
             return None
-        delta = _solve_exact_system(
-            [[g[r][j] for r in chosen] for j in range(k)], [-t for t in resid]
-        )
+        delta = solve_rational([[g[r][j] for r in chosen] for j in range(k)], [-t for t in resid])
         if delta is None:
             continue
         yy = list(yf)
@@ -1028,7 +1011,8 @@ def alp_value_bracket(
       > 0`` for a soft-aggregation basis) by the least ``delta`` making it exactly
       feasible; its objective is an upper bound;
     * ``lo``: the solver's duals ``y >= 0``, with the residual ``G'y - Phi'c`` cancelled
-      exactly on the ``K`` rows of largest dual (a ``K x K`` rational solve), stay ``>= 0``
+      exactly on the ``K`` rows of largest dual (a ``K x K`` rational solve,
+      :func:`lpbounds.exact.rationals.solve_rational`), stay ``>= 0``
       and give the weak-duality bound ``b'y'``.
 
     Either end is None when its construction fails (the bracket is then unbounded on that

@@ -106,6 +106,7 @@ from .results import NLPIteration, NLPResult
 from .stop import StopReason
 
 if TYPE_CHECKING:
+    from ...exact.lp import ExactLP
     from .cuts import NLPMaster
 
 __all__ = [
@@ -405,6 +406,8 @@ class NLP:
         gap_rtol: float = NLP_GAP_RTOL,
         progress: bool = False,
         raise_on_failure: bool = False,
+        arithmetic: str = "float",
+        size_limit: int | None = None,
         **options: Any,
     ) -> NLPResult:
         """Solve the NLP with ``method``.
@@ -427,6 +430,15 @@ class NLP:
         raise_on_failure : bool
             Raise :class:`~lpbounds.errors.ConvergenceError` unless the status is
             ``OPTIMAL`` (default: return the result with its status).
+        arithmetic : {"float", "rational"}
+            ``"rational"``: after the method, also ``w*`` exactly, by exact strategy
+            iteration on the game started at the method's point
+            (:func:`lpbounds.exact.lp.game_optimum`; verified as a fixed point of ``G`` in
+            rationals); ``result.exact`` holds it with the method's exact error and whether
+            its certified bracket held. The float result is unchanged.
+        size_limit : int, optional
+            ``arithmetic="rational"``: the most partitions solved together (default
+            :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`), checked before any exact work.
         **options
             The method's own keywords, listed under Other Parameters.
 
@@ -481,6 +493,8 @@ class NLP:
         if not (isinstance(gap_rtol, int | float) and np.isfinite(gap_rtol) and gap_rtol >= 0):
             raise ValidationError(f"gap_rtol must be a finite number >= 0; got {gap_rtol!r}")
         opts = _method_options(method, options)
+        if arithmetic not in ("float", "rational"):
+            raise ValidationError(f"arithmetic must be 'float' or 'rational'; got {arithmetic!r}")
         t0 = time.perf_counter()
         with _progress_bar(progress, method, opts.get("max_iter")) as tick, threads_for(self.rows):
             if method == "cutting-planes":
@@ -494,7 +508,28 @@ class NLP:
         result = self._result(method, out, gap_rtol, time.perf_counter() - t0)
         if raise_on_failure and not result.converged:
             raise ConvergenceError(result.summary())
+        if arithmetic == "rational":
+            result.exact = self.exact_optimum(result, size_limit=size_limit)
         return result
+
+    def exact_optimum(
+        self,
+        result: NLPResult | None = None,
+        *,
+        size_limit: int | None = None,
+        callback: Any = None,
+    ) -> ExactLP:
+        """``w*`` exactly (:func:`lpbounds.exact.lp.game_optimum`), judged against
+        ``result`` when given (its exact error, whether its bracket held)."""
+        from ...exact.files import mdp_data
+        from ...exact.lp import game_optimum
+
+        approx = None if result is None else result.values
+        exact = game_optimum(mdp_data(self.mdp, self.partition), list(self.cost), approx=approx,
+                             callback=callback, size_limit=size_limit)  # fmt: skip
+        if result is not None:
+            exact.judge(result.values, result.lower_values, result.upper_values, result.objective)
+        return exact
 
     # ------------------------------------------------------------------ helpers
     def certify(self, w: Any) -> Certificate:

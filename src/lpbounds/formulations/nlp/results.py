@@ -16,6 +16,8 @@ from .stop import StopReason
 if TYPE_CHECKING:  # annotations only
     import pandas as pd
 
+    from ...exact.lp import ExactLP
+
 __all__ = ["NLPIteration", "NLPResult"]
 
 
@@ -108,6 +110,11 @@ class NLPResult(Result):
     extra : dict
         Method-specific data (``method_bracket``: the method's own bracket on ``c'w*``;
         the cuts, the MILP's raw point and status, ...).
+    exact : ExactLP or None
+        ``solve(..., arithmetic="rational")`` only: ``w*`` exactly (the game's value by
+        exact strategy iteration), the method's exact error and whether its certified
+        bracket held (:class:`lpbounds.exact.lp.ExactLP`, without duals: the NLP is not
+        an LP).
     """
 
     formulation: str
@@ -134,6 +141,7 @@ class NLPResult(Result):
     gap_rtol: float
     scale: float
     extra: dict[str, Any] = field(default_factory=dict)
+    exact: ExactLP | None = None
 
     @property
     def converged(self) -> bool:
