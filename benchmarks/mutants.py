@@ -128,9 +128,10 @@ MUTANTS = (
     Mutant(
         "dual-bound-cancellation", "",
         "the weak-duality objective bound's allowance for the rows' rounding taken "
-        "relative to the entries of A (after a self-loop's cancellation), as before issue 35",
+        "relative to the entries of A (after a self-loop's cancellation), as before issues 35 "
+        "and 38: the stored rows' distance from the exact ones (row_rounding) ignored",
         CERT, "dual_objective_bound",
-        ((r"2\.0 \* float\(size\.max\(initial=0\.0\)\)", "0.0", 1),),
+        ((r"if row_rounding:", "if False:", 1),),
         CERTIFICATES,
     ),
     Mutant(
