@@ -28,7 +28,8 @@ def solve_game(
     arithmetic: Literal["float", "rational"] = "float",
     size_limit: int | None = None,
 ) -> DPResult:
-    r"""Fixed point of ``(Gw)(i) = max_u min_{r in (i, u)} q_r(w)`` (Fact 2, :mod:`lpbounds.rows`).
+    r"""Fixed point of ``(Gw)(i) = max_u min_{r in (i, u)} q_r(w)`` (Fact 2 of
+    :mod:`lpbounds.rows.system`).
 
     The least element of the disjunctive NLP's feasible set (eq. 25) when ``rows`` are
     the NLP's terms (``BellmanRows.aggregate(mdp, partition, reduce="min")``): the value
