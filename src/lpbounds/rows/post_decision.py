@@ -150,6 +150,7 @@ class PostDecisionRows:
         return row_sums(self.probs)
 
     # ------------------------------------------------------------------ sweep protocol
+    # intended parallel: the SweepOperator signatures (rows/sweep.py), repeated by each operator
     def new_vector(self) -> np.ndarray:
         """An uninitialised float64 vector over the states."""
         return np.empty(self.n_vars)

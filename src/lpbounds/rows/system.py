@@ -401,6 +401,7 @@ class BellmanRows:
         )  # fmt: skip
 
     # ------------------------------------------------------------------ sweep protocol
+    # intended parallel: the SweepOperator signatures (rows/sweep.py), repeated by each operator
     # fused sweeps of the DP loops (SweepOperator): write into ``out`` and return the
     # extremes of ``out - v`` (no validation: the hot path; the callers check once)
     def new_vector(self) -> np.ndarray:
