@@ -112,7 +112,7 @@ def _aggregate_steps(mdp, part) -> str:
         _aggregate.mark_groups(order, oa, key, targets, probs.view(np.int64), new)
         out.append(("group marks", clock() - t0))
         return "; ".join(f"{k} {v:.2f} s" for k, v in out) + " (then the merge kernel)"
-    except Exception as exc:  # the kernels are private to rows/__init__.py and may change
+    except Exception as exc:  # the kernels are private to rows/aggregation.py and may change
         return f"(not available: {exc})"
 
 

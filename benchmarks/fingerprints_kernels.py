@@ -45,7 +45,8 @@ def rows_arrays(rows: Any) -> tuple[Any, ...]:
 
 def aggregation(name: str, mdp: Any, part: Any, nlp: bool) -> None:
     from lpbounds.dp import solve_exact
-    from lpbounds.rows import BellmanRows, _group_rows
+    from lpbounds.rows import BellmanRows
+    from lpbounds.rows.aggregation import group_rows
 
     rng = np.random.default_rng(5)
     high = BellmanRows.aggregate(mdp, part, reduce="max")
@@ -57,7 +58,7 @@ def aggregation(name: str, mdp: Any, part: Any, nlp: bool) -> None:
     w = rng.normal(size=part.n_partitions) * 10
     say(name, "q_values (min rows)", low.q_values(w))
     say(name, "G w (game operator)", *low.apply_maxmin(w))
-    group, count = _group_rows(low.owner, low.action, low.targets, np.asarray(low.probs))
+    group, count = group_rows(low.owner, low.action, low.targets, np.asarray(low.probs))
     say(name, f"hash grouping ({count:,})", group)
     if nlp:
         from lpbounds.formulations import NLP

@@ -137,7 +137,7 @@ MUTANTS = (
     Mutant(
         "dp-modulus-bare-discount", "",
         "the exact DP's error bound with the bare discount as contraction modulus",
-        "src/lpbounds/dp/__init__.py", "modulus",
+        "src/lpbounds/dp/operators.py", "modulus",
         ((r"return ops\.row_sums\(\)\.modulus\(ops\.discount\)", "return float(ops.discount)", 1),),
         DP,
     ),
@@ -158,7 +158,7 @@ MUTANTS = (
     Mutant(
         "porteus-margin-zero", "",
         "the Porteus bounds without their rounding margin",
-        "src/lpbounds/dp/__init__.py", "porteus_bounds",
+        "src/lpbounds/dp/porteus.py", "porteus_bounds",
         ((r"\n    tail = _PorteusTail\(", "\n    m = 0.0\n    tail = _PorteusTail(", 1),),
         DP,
     ),

@@ -265,3 +265,72 @@ def test_one_module_constructs_highs():
                     makers.append(module)
                     break
     assert makers == ["lpbounds.formulations.highs"]
+
+
+#: the longest a subpackage's ``__init__.py`` may be: a docstring and its re-exports
+INIT_MAX_LINES = 150
+
+
+def test_package_inits_are_tables_of_contents():
+    """No package of lpbounds but the top-level facade keeps its implementation in its
+    ``__init__.py`` (issue 37): every other one is a table of contents."""
+    long = {
+        name: n
+        for name, path in MODULES.items()
+        if path.name == "__init__.py"
+        and name != "lpbounds"
+        and (n := len(path.read_text().splitlines())) > INIT_MAX_LINES
+    }
+    assert long == {}
+
+
+#: a file the "Where is X" table names, with an optional ``::name`` it must define
+_WHERE_PATH = re.compile(r"`([\w.-]+(?:/[\w.-]+)*\.(?:py|pyi|c|h|md|toml))(?:::(\w+))?`")
+
+
+def where_table(text: str) -> list[tuple[str, list[tuple[str, str | None]]]]:
+    """(question, [(path, name or None), ...]) per row of the "Where is X" table."""
+    section = re.split(r"^## Where is X\s*$", text, maxsplit=1, flags=re.M)[1]
+    section = re.split(r"^## ", section, maxsplit=1, flags=re.M)[0]
+    rows = []
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 2 or not cells[0].endswith("?"):
+            continue
+        rows.append((cells[0], [(m[1], m[2] or None) for m in _WHERE_PATH.finditer(cells[1])]))
+    return rows
+
+
+def where_missing(rows: list[tuple[str, list[tuple[str, str | None]]]], root: Path) -> list[str]:
+    """The files the table names that do not exist, and the names they do not define."""
+    missing = []
+    for _, places in rows:
+        for rel, name in places:
+            path = root / rel
+            if not path.is_file():
+                missing.append(rel)
+            elif name and not re.search(
+                rf"^\s*(?:(?:async\s+)?def |class )?{name}\b\s*[(:=]", path.read_text(), re.M
+            ):
+                missing.append(f"{rel}::{name}")
+    return missing
+
+
+def test_where_table_answers_ten_questions_with_files_that_exist():
+    rows = where_table(MAP.read_text())
+    assert len(rows) >= 10, "docs/architecture.md lost questions of its 'Where is X' table"
+    assert [q for q, places in rows if not places] == [], "a question without a file"
+    assert where_missing(rows, ROOT) == []
+
+
+def test_where_scan_finds_a_missing_file_and_a_missing_name(tmp_path):
+    """The check above could fail: a file that is not there and a name a file lacks."""
+    (tmp_path / "here.py").write_text("def present():\n    pass\n")
+    text = (
+        "## Where is X\n\n| question | the file |\n|---|---|\n"
+        "| Where is A? | `here.py::present` and `gone.py` |\n"
+        "| Where is B? | `here.py::absent` |\n"
+    )
+    rows = where_table(text)
+    assert [q for q, _ in rows] == ["Where is A?", "Where is B?"]
+    assert where_missing(rows, tmp_path) == ["gone.py", "here.py::absent"]

@@ -113,10 +113,10 @@ def test_rst_extension_rewrites_roles_math_and_admonitions():
         ".. warning::\n   Careful.\n\nAfter."
     )
     out = ext.rewrite(cls, text)
-    assert (
-        '<autoref identifier="lpbounds.rows.BellmanRows" optional><code>BellmanRows</code>' in out
-    )
-    assert 'identifier="lpbounds.rows.BellmanRows.aggregate"' in out
+    where = str(cls.canonical_path)  # the defining module's path, lpbounds.rows.system...
+    assert where.startswith("lpbounds.rows.") and where.endswith(".BellmanRows")
+    assert f'<autoref identifier="{where}" optional><code>BellmanRows</code>' in out
+    assert f'identifier="{where}.aggregate"' in out
     assert "`numpy.zeros`" in out and "$x^2$" in out
     assert "$$\na = b\n+ c\n$$" in out
     assert "!!! warning\n    Careful." in out and out.endswith("After.")

@@ -514,9 +514,10 @@ def test_thread_choice_changes_no_number(monkeypatch, form, method):
     """Calibrated threads (re-timed every sweep), one thread and two give identical results."""
     pool = _two_threads()
     from lpbounds import dp
+    from lpbounds.dp import threads as dp_threads  # where ThreadChoice reads the threshold
 
     use_path(monkeypatch, "compiled")  # every sweep split over the threads
-    monkeypatch.setattr(dp, "SERIAL_SWEEP_READS", 0)  # the choice runs on this small model
+    monkeypatch.setattr(dp_threads, "SERIAL_SWEEP_READS", 0)  # the choice runs on this model
     monkeypatch.setattr(dp.ThreadChoice, "RECHECK", 1)  # and switches as often as it can
     mdp = PatrolModel(PatrolParams(N=6, stations=(0, 3), Gamma=4)).mdp()
     model = mdp if form == "post-decision" else exact_rows(mdp)
@@ -538,8 +539,9 @@ def test_thread_choice_changes_no_number(monkeypatch, form, method):
 def test_thread_choice_follows_the_timings(monkeypatch):
     pool = _two_threads()
     from lpbounds import dp
+    from lpbounds.dp import threads as dp_threads  # where ThreadChoice reads the threshold
 
-    monkeypatch.setattr(dp, "SERIAL_SWEEP_READS", 0)
+    monkeypatch.setattr(dp_threads, "SERIAL_SWEEP_READS", 0)
     before = pool.get_threads()
     pool.set_threads(2)
     try:

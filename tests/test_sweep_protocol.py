@@ -267,10 +267,12 @@ def test_no_patrol_module_uses_private_names_of_dp_or_matrix_free(path):
 
 def test_dp_uses_only_the_public_protocol():
     """dp reaches the operators through SweepOperator's methods, not their private ones."""
-    tree = _tree(SRC / "dp/__init__.py")
     privates = {"_sweep_max", "_sweep_policy", "_sweep_maxmin", "_evaluator", "_chunks"}
-    used = {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
-    assert not used & privates
+    modules = sorted((SRC / "dp").glob("*.py"))
+    assert {p.stem for p in modules} >= {"__init__", "loop", "evaluation"}
+    for path in modules:
+        used = {n.attr for n in ast.walk(_tree(path)) if isinstance(n, ast.Attribute)}
+        assert not used & privates, path.name
     for cls in (BellmanRows, PostDecisionRows, MatrixFreePatrol):
         for meth in PROTOCOL:
             assert callable(getattr(cls, meth)), (cls.__name__, meth)

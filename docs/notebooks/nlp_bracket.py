@@ -25,7 +25,7 @@
 #
 # Each constraint is a disjunction (one of the states of $S_i$ must satisfy it), so the
 # feasible set is not convex. Still, $\bar w(i) = \min_{x \in S_i} V^*(x)$ is feasible, and
-# the feasible set has a least element $w^*$ (Fact 2 of `lpbounds.rows`: the fixed point of
+# the feasible set has a least element $w^*$ (Fact 2 of `lpbounds.rows.system`: the fixed point of
 # $(Gw)(i) = \max_u \min_{x \in S_i} [\dots]$, the value of a zero-sum game). Hence
 #
 # $$

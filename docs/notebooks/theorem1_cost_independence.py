@@ -56,7 +56,7 @@ print(part)
 # %% [markdown]
 # ## $v^*$ without a solver
 #
-# Why the cost does not matter (Fact 1 of `lpbounds.rows`): the operator
+# Why the cost does not matter (Fact 1 of `lpbounds.rows.system`): the operator
 # $(Tv)(i) = \max_{x \in S_i,\, u} \big[ R_u(x) + \lambda \sum_l p_l\, v(\bar f(x,u,Y_l)) \big]$
 # is monotone and a $\lambda$-contraction, so it has one fixed point $v^*$. A feasible $v$
 # satisfies $v \ge Tv$, hence $v \ge T^k v \to v^*$: $v^*$ is feasible and below every

@@ -334,3 +334,19 @@ def test_paper_instance_greedy_and_table1_equal_the_mdp_path():
     for f in dataclasses.fields(ref):
         if f.name != "policy_name":
             np.testing.assert_array_equal(getattr(mine, f.name), getattr(ref, f.name), f.name)
+
+
+def test_the_one_markdown_table_writer_aligns_and_escapes():
+    """patrol.report.markdown_table writes the greedy tables too (issue 37): right-aligned
+    columns are ``---:``, a ``|`` in a cell is escaped, a number is formatted as in the
+    report (thousands separated), a string is kept as given."""
+    from lpbounds.patrol.report import markdown_table
+
+    text = markdown_table(["name", "n"], [["a|b", 12345], ["c", "7.50000"]], align="lr")
+    assert text.splitlines() == [
+        "| name | n |",
+        "|---|---:|",
+        "| a\\|b | 12,345 |",
+        "| c | 7.50000 |",
+    ]
+    assert markdown_table(["x"], [[1]]).splitlines()[1] == "|---|"

@@ -1,7 +1,9 @@
 """Plain-numpy twins of the C kernels of :mod:`lpbounds._kernels.ckernels` and
 :mod:`lpbounds._kernels.native`: the reference the tests compare them with.
 
-Each function has the name, arguments and outputs of its C twin and the same
+Each function is the reference of one C kernel: an intended parallel, not a duplicate
+(``duplicates`` lists their shared signatures; they stay, and the tests compare the two bit
+for bit). Each has the name, arguments and outputs of its C twin and the same
 arithmetic: a row's value is ``acc = 0.0; acc += probs[r, l] * v[targets[r, l]]`` for
 ``l = 0, 1, ...`` (one multiply and one add per outcome, in outcome order, no fused
 multiply-add), then ``reward[r] + discount * acc``; a max (min) keeps the *first* row or

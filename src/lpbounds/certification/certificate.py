@@ -2,7 +2,7 @@ r"""Certified brackets on the exact optimum of a Bellman row system, from a poin
 
 Every LP lpbounds builds from Bellman rows (ELP, RLP, SLP, IB, UBLP, LBLP) has as its
 exact optimum the least feasible point ``v*``, the fixed point of the max over the rows
-``(Tv)(i) = max_{r of i} q_r(v)`` (Fact 1 of :mod:`lpbounds.rows`); the disjunctive NLP's
+``(Tv)(i) = max_{r of i} q_r(v)`` (Fact 1 of :mod:`lpbounds.rows.system`); the disjunctive NLP's
 is the fixed point of the max-min ``G`` (Fact 2). :func:`certify` turns *any* point ``v``
 -- an LP solver's answer, whatever the solver claimed -- into a bracket
 ``lower <= v* <= upper`` that holds in floating point.

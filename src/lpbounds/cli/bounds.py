@@ -3,7 +3,7 @@
 Computes, from the ``M`` partitions alone (:mod:`lpbounds.patrol.bounds`):
 
 * UBLP (Theorem 4) and LBLP (Theorem 3): each as a solver-free fixed point (its exact LP
-  optimum, Fact 1 in :mod:`lpbounds.rows`) and as an LP with cvxpy (``--solver``),
+  optimum, Fact 1 in :mod:`lpbounds.rows.system`) and as an LP with cvxpy (``--solver``),
   cross-checked against the fixed point. The LP is solved by default up to
   ``--lp-max-partitions`` partitions (50,000: the paper's M = 8,900 takes seconds, the
   8-station M = 207,928 takes HiGHS many minutes); ``--lp`` forces it, ``--no-lp`` skips it;

@@ -47,7 +47,7 @@ class IB(RowsLP):
 
     The rows are RLP's (merged) aggregated rows, one copy per block, with owner in
     block ``j+1`` and targets in block ``j`` (cyclically): a row system on ``L * M``
-    variables, whose least feasible point (Fact 1 of :mod:`lpbounds.rows`, so the LP's
+    variables, whose least feasible point (Fact 1 of :mod:`lpbounds.rows.system`, so the LP's
     optimum for every ``c >= 0``) is ``(v*, ..., v*)`` (:meth:`fixed_point`).
 
     Parameters
@@ -233,7 +233,7 @@ class LLP(Formulation):
     ``(v~, z~)`` has ``v~ >= v*`` and ``Phi v~ >= Phi v*``: no better bound. Since
     ``z = A_pair v - R``, the objective is ``g' v - d' R`` with the effective cost
     ``g = c-bar + A_pair' d``: when ``g >= 0`` the optimal ``v`` is ``v*`` again (Fact 1
-    of :mod:`lpbounds.rows`); when ``g`` has negative entries it may be larger than
+    of :mod:`lpbounds.rows.system`); when ``g`` has negative entries it may be larger than
     ``v*``, never smaller.
 
     Parameters

@@ -11,7 +11,7 @@ r"""The restricted LP under state aggregation (paper eq. 9, compact form eq. 10)
 ``Phi v*`` is an upper bound on ``V*`` (every solution of the Bellman inequalities
 dominates ``V*``: the paper's lemma on iterated Bellman inequalities), and by Theorem 1 the
 optimum ``v*`` is the same for every cost ``c >= 0``: it is the least feasible point,
-the fixed point of the max over the aggregated rows (Fact 1 in :mod:`lpbounds.rows`),
+the fixed point of the max over the aggregated rows (Fact 1 in :mod:`lpbounds.rows.system`),
 and every feasible ``v`` dominates it.
 """
 

@@ -1,7 +1,7 @@
 r"""The LP of a Bellman row system: ``min c'v  s.t.  v(owner_r) >= q_r(v)`` for every row.
 
 ELP, RLP, UBLP and LBLP are all of this form; they differ only in their rows. By
-Fact 1 of :mod:`lpbounds.rows` the optimum for any cost ``c >= 0`` is the least
+Fact 1 of :mod:`lpbounds.rows.system` the optimum for any cost ``c >= 0`` is the least
 feasible point, the fixed point of the max over the rows, which :meth:`RowsLP.fixed_point`
 computes without a solver, and :func:`lpbounds.certification.certificate.certify` turns any
 returned point

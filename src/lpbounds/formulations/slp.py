@@ -23,7 +23,7 @@ mu_u^i(x)`` and
     u \in U_i \iff \sum_{x \in S_i} \mu_u^i(x) > 0.
     \end{array}
 
-So ``SLP(mu)`` is the exact LP of that reduced MDP; by Fact 1 of :mod:`lpbounds.rows`
+So ``SLP(mu)`` is the exact LP of that reduced MDP; by Fact 1 of :mod:`lpbounds.rows.system`
 its optimum, for every ``c >= 0``, is the reduced MDP's value
 (:meth:`SLP.fixed_point`). Rows with zero total weight (``0 >= 0``) are dropped.
 
@@ -32,7 +32,7 @@ MDP's value is RLP's ``v*`` (:meth:`SLP.from_rlp`).
 
 Action sets need no special rule here (unlike the disjunctive NLP, whose ``(i, u)`` is
 kept only when ``u`` is allowed at every state of ``S_i``; see "Action sets" in
-:mod:`lpbounds.rows`): ``mu`` must vanish on disallowed pairs (checked), so each
+:mod:`lpbounds.rows.aggregation`): ``mu`` must vanish on disallowed pairs (checked), so each
 surrogate row combines only RLP rows that exist, and ``u in U_i`` as soon as *some* state
 of ``S_i`` allows ``u`` with positive weight. That keeps ``SLP(mu)`` a relaxation of RLP
 for every ``mu`` and keeps Lemma 2 (RLP's pair duals are zero on disallowed pairs).

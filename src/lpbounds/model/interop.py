@@ -479,6 +479,7 @@ def _layout_hint(P: Any) -> str:
     return ""
 
 
+# intended parallel: the signature of FiniteMDP.from_matrices, its thin wrapper
 def from_matrices(
     cls: type[FiniteMDP],
     P: Any,
@@ -700,6 +701,7 @@ def _quantecon_sa(
     )  # fmt: skip
 
 
+# intended parallel: the signature of FiniteMDP.from_quantecon, its thin wrapper
 def from_quantecon(
     cls: type[FiniteMDP],
     R: Any,
@@ -915,6 +917,7 @@ def _pair_rewards(
     )  # fmt: skip
 
 
+# intended parallel: the signature of FiniteMDP.from_transitions, its thin wrapper
 def from_transitions(
     cls: type[FiniteMDP],
     rows: Any,

@@ -438,6 +438,8 @@ class FiniteMDP:
         )
 
     # ------------------------------------------------------------------ conversions
+    # intended parallel: each from_* repeats its interop converter's signature (documented here,
+    # scipy.sparse imported only when one runs); the arguments are handled in interop alone
     @classmethod
     def from_matrices(
         cls,

@@ -294,7 +294,7 @@ class UBLP(_PatrolLP):
     upper bound on ``V*``: ``V*(x) <= v*(i)`` for every ``x`` in ``S_i``. The reduction
     relies on Claim 2 (monotonicity of ``V*``); see the project's report for where it
     holds. Built from the partitions alone (:func:`patrol_rows` with ``"upper"``); the
-    optimum does not depend on the cost ``c >= 0`` (Fact 1 of :mod:`lpbounds.rows`) and
+    optimum does not depend on the cost ``c >= 0`` (Fact 1 of :mod:`lpbounds.rows.system`) and
     :meth:`fixed_point` computes it without a solver.
 
     As a cvxpy model: :attr:`problem` is ``min c-bar'w  s.t.  bellman``, with the variable
@@ -324,7 +324,7 @@ class LBLP(_PatrolLP):
     :meth:`fixed_point` computes it without a solver.
 
     Action sets: the NLP keeps a disjunction ``(i, u)`` only when ``u`` is allowed at
-    every state of ``S_i`` ("Action sets" in :mod:`lpbounds.rows`). The patrol model
+    every state of ``S_i`` ("Action sets" in :mod:`lpbounds.rows.aggregation`). The patrol model
     forbids loitering at an empty station, but whether loitering is allowed depends only
     on ``(l, d, A_l)``, which the partition key fixes; so every state of ``S_i`` has the
     same actions, the rule drops nothing, and LBLP's rows (one per allowed (partition,

@@ -424,18 +424,17 @@ class GreedyValueEstimate:
     def markdown(self) -> str:
         """The per-start table (Markdown): ``w*``, ``V_hat +- half-width``, ``v*``, the
         bound gap and the statistical certificate."""
-        lines = [
-            f"| start | state | w*(x) | V_pis(x): mean +- {self.level:.0%} t half-width "
-            "| v*(x) | v* - w* | V* - V_pis <= |",
-            "|---|---:|---:|---:|---:|---:|---:|",
-        ]
-        for r in self.rows():
-            lines.append(
-                f"| {r['start']} | {r['state']:,} | {r['lower']:.5f} | {r['mean']:.5f} +- "
-                f"{r['half_width']:.5f} | {r['upper']:.5f} | {r['upper'] - r['lower']:.5f} "
-                f"| {r['gap_bound']:.5f} |"
-            )
-        return "\n".join(lines)
+        from .report import markdown_table
+
+        header = ["start", "state", "w*(x)", f"V_pis(x): mean +- {self.level:.0%} t half-width",
+                  "v*(x)", "v* - w*", "V* - V_pis <="]  # fmt: skip
+        rows = [
+            [str(r["start"]), f"{r['state']:,}", f"{r['lower']:.5f}",
+             f"{r['mean']:.5f} +- {r['half_width']:.5f}", f"{r['upper']:.5f}",
+             f"{r['upper'] - r['lower']:.5f}", f"{r['gap_bound']:.5f}"]
+            for r in self.rows()
+        ]  # fmt: skip
+        return markdown_table(header, rows, align="lrrrrrr")
 
 
 def _start_states(
@@ -722,19 +721,20 @@ class GreedyTable1:
 def table1_markdown(tables: dict[str, GreedyTable1]) -> str:
     """Table 1 rows of ``pi_s`` (Markdown), one per named size, with the 4-station
     conventions: delay to the first loiter, uncapped; in brackets to its end."""
-    lines = [
-        "| instance | mean loiters | mean delay (+1) | worst delay (+1) | alerts serviced "
-        "| states visited |",
-        "|---|---:|---:|---:|---:|---:|",
-    ]
+    from .report import markdown_table
+
+    header = ["instance", "mean loiters", "mean delay (+1)", "worst delay (+1)",
+              "alerts serviced", "states visited"]  # fmt: skip
+    rows = []
     for name, t in tables.items():
         s = t.statistics
-        lines.append(
-            f"| {name} | {s.mean_loiters:.2f} | {s.mean_delay:.2f} ({s.mean_delay_plus_one:.2f}) "
-            f"| {s.worst_delay} ({s.worst_delay_plus_one}) | {s.n_serviced:,} "
-            f"| {t.visited_states:,} |"
-        )
-    return "\n".join(lines)
+        rows.append(
+            [str(name), f"{s.mean_loiters:.2f}",
+             f"{s.mean_delay:.2f} ({s.mean_delay_plus_one:.2f})",
+             f"{s.worst_delay} ({s.worst_delay_plus_one})", f"{s.n_serviced:,}",
+             f"{t.visited_states:,}"]
+        )  # fmt: skip
+    return markdown_table(header, rows, align="lrrrrr")
 
 
 def greedy_table1(

@@ -167,6 +167,7 @@ class MatrixFreePatrol:
         return dp_default_tol(self.reward_absmax, self.discount, self.n_outcomes)
 
     # ------------------------------------------------------------------ sweep protocol
+    # intended parallel: the SweepOperator signatures (rows/sweep.py), repeated by each operator
     def new_vector(self) -> np.ndarray:
         """An uninitialised float64 vector over the states."""
         return np.empty(self.n_vars)

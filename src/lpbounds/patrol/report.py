@@ -34,11 +34,16 @@ def _fmt(x: Any, digits: int = 4) -> str:
     return str(x)
 
 
-def markdown_table(header: list[str], rows: list[list[Any]]) -> str:
-    """A GitHub-flavoured markdown table."""
+def markdown_table(header: list[str], rows: list[list[Any]], align: str | None = None) -> str:
+    """A GitHub-flavoured markdown table: the one table writer of the patrol's reports.
+
+    ``align`` has one letter per column, ``"l"`` (default) or ``"r"`` (``---:``); a cell
+    that is not a string is formatted as the report's numbers are.
+    """
+    marks = align or "l" * len(header)
     out = [
         "| " + " | ".join(h.replace("|", "\\|") for h in header) + " |",
-        "|" + "|".join("---" for _ in header) + "|",
+        "|" + "|".join("---:" if m == "r" else "---" for m in marks) + "|",
     ]
     out += ["| " + " | ".join(_fmt(c).replace("|", "\\|") for c in r) + " |" for r in rows]
     return "\n".join(out)

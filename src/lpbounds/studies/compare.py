@@ -62,6 +62,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, cast
@@ -372,12 +373,17 @@ class FormulationSpec:
     description: str
 
 
-def _rows_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
-    """Fixed point of the max over the formulation's rows (Fact 1), with its error bound."""
+def _dp_reference(rows: Any) -> tuple[np.ndarray, float]:
+    """Fixed point of the max over ``rows`` (Fact 1) by exact DP, with its error bound."""
     from ..dp import solve_exact
 
-    res = solve_exact(form.rows)
+    res = solve_exact(rows)
     return res.values, float(res.error_bound)
+
+
+def _rows_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
+    """Fixed point of the max over the formulation's rows (Fact 1), with its error bound."""
+    return _dp_reference(form.rows)
 
 
 def _fixed_point_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
@@ -429,11 +435,9 @@ def _build_alp(case: Case) -> Any:
 
 def _alp_reference(case: Case, form: Any) -> tuple[np.ndarray, float]:
     """With the hard basis Phi, ALP is RLP: its optimum is RLP's least feasible point."""
-    from ..dp import solve_exact
     from ..rows import BellmanRows
 
-    res = solve_exact(BellmanRows.aggregate(case.mdp, case.partition, reduce="max"))
-    return res.values, float(res.error_bound)
+    return _dp_reference(BellmanRows.aggregate(case.mdp, case.partition, reduce="max"))
 
 
 def _build_patrol(kind: str) -> Callable[[Case], Any]:
@@ -1139,31 +1143,26 @@ def _execute(
     log records of other processes are logged here, each distinct one once."""
     records: list[dict[str, Any]] = []
     seen: set[LogLine] = set()
-    if scheduler in DASK_LOCAL:
-        batches: Iterable[tuple[list[dict[str, Any]], list[LogLine]]] = _run_dask_local(
-            tasks, str(scheduler)
-        )
-    elif scheduler is not None:
-        batches = _run_dask(tasks, scheduler)
-    elif (jobs or os.cpu_count() or 1) <= 1 or len(tasks) <= 1:
-        batches = ((run_task(t), []) for t in tasks)  # this process: logged as it happens
-    else:
-        n = min(int(jobs or os.cpu_count() or 1), len(tasks))
-        # spawn, not fork: forking a process that has run OpenMP code (HiGHS)
-        # aborts the child ("fork() called from a process already using GNU OpenMP")
-        ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=n, mp_context=ctx) as pool:
-            for done, (batch, lines) in enumerate(pool.map(run_task_in_worker, tasks), 1):
-                _relog(lines, seen)
-                records += batch
-                if progress:
-                    progress(done, len(tasks))
-        return records
-    for done, (batch, lines) in enumerate(batches, 1):
-        _relog(lines, seen)
-        records += batch
-        if progress:
-            progress(done, len(tasks))
+    with ExitStack() as stack:  # the process pool, when there is one, lives as long as this
+        batches: Iterable[tuple[list[dict[str, Any]], list[LogLine]]]
+        if scheduler in DASK_LOCAL:
+            batches = _run_dask_local(tasks, str(scheduler))
+        elif scheduler is not None:
+            batches = _run_dask(tasks, scheduler)
+        elif (jobs or os.cpu_count() or 1) <= 1 or len(tasks) <= 1:
+            batches = ((run_task(t), []) for t in tasks)  # this process: logged as it happens
+        else:
+            n = min(int(jobs or os.cpu_count() or 1), len(tasks))
+            # spawn, not fork: forking a process that has run OpenMP code (HiGHS)
+            # aborts the child ("fork() called from a process already using GNU OpenMP")
+            ctx = multiprocessing.get_context("spawn")
+            pool = stack.enter_context(ProcessPoolExecutor(max_workers=n, mp_context=ctx))
+            batches = pool.map(run_task_in_worker, tasks)
+        for done, (batch, lines) in enumerate(batches, 1):
+            _relog(lines, seen)
+            records += batch
+            if progress:
+                progress(done, len(tasks))
     return records
 
 

@@ -2,7 +2,7 @@ r"""An LP benchmark library with known optima: export a Bellman-row LP, score an
 
 Every LP lpbounds builds from Bellman rows (ELP, RLP, SLP, IB, UBLP, LBLP) is
 ``min c'x  s.t.  A x >= b`` (``x`` free) whose exact optimum is the least feasible point,
-the fixed point of the max over its rows (Fact 1 of :mod:`lpbounds.rows`), computable
+the fixed point of the max over its rows (Fact 1 of :mod:`lpbounds.rows.system`), computable
 without an LP solver at any size. :func:`export_lp` writes such an LP for solvers outside
 lpbounds and cvxpy, with what is needed to judge their answers:
 

@@ -4,8 +4,8 @@ The NLP's feasible set is ``F = {w : w(i) >= min_{t in (i,u)} q_t(w) for every (
 with ``q_t(w) = rho_t + lambda sum_l p_{t,l} w(k_{t,l})``; each (i, u) with ``T >= 2``
 terms is the disjunction ``OR_t  a_t'w >= b_t`` (``a_t = e_i - lambda P_t``, ``b_t = rho_t``).
 The (i, u) are those of ``nlp.rows``: with action sets, only the ``u`` allowed at every
-state of ``S_i`` ("Action sets" in :mod:`lpbounds.rows`), so the master, the CGLP and the
-box ``[min rho, max rho] / (1 - lambda)`` are all built from the masked rows.
+state of ``S_i`` ("Action sets" in :mod:`lpbounds.rows.aggregation`), so the master, the
+CGLP and the box ``[min rho, max rho] / (1 - lambda)`` are all built from the masked rows.
 
 The loop's own bracket (master bound, strategy values) is reported in the log and in
 ``NLPResult.extra["method_bracket"]``; the result's certified bounds come from the
@@ -55,7 +55,7 @@ Making the cuts valid (``/work/shared/notes/nlp-cutting-planes.md``)
 
 The upper side of the bracket: at each master point ``wbar`` the minimiser's strategy
 ``sigma(i,u) = argmin_t q_t(wbar)`` is evaluated exactly (the least element of its row
-system, Fact 1 in :mod:`lpbounds.rows`); that point is feasible for the NLP (after the
+system, Fact 1 in :mod:`lpbounds.rows.system`); that point is feasible for the NLP (after the
 ``residual / (1 - lambda)`` shift that makes it so in floating point), so ``c'`` of it is
 an upper bound.
 

@@ -3,7 +3,7 @@ r"""Monotone cuts and box resolution for the NLP (eq. 25): a cutting-plane metho
 Notation: the NLP's feasible set is ``F = {w : w(i) >= min_{k in d} f_k(w)}`` for every
 disjunction ``d = (i, u)``, with terms ``f_k(w) = rho_k + a_k'w`` and ``a_k = lambda P_k
 >= 0`` (``P_k``: the term's successor distribution, duplicates summed). ``F`` is closed
-under componentwise ``min`` and has a least element ``w*`` (Fact 2 of :mod:`lpbounds.rows`).
+under componentwise ``min`` and has a least element ``w*`` (Fact 2 of :mod:`lpbounds.rows.system`).
 
 **Monotone cut.** Let ``l <= w*``. For every ``w in F`` with ``w >= l`` and every ``d``,
 with ``amin = min_{k in d} a_k`` elementwise (any ``0 <= amin <= a_k`` will do)::

@@ -13,7 +13,7 @@ min_{S_i} V*`` is feasible, eq. 24). The minimum over ``x in S_i`` only ranges o
 distinct successor tuples of ``T(i, u)`` (the *terms*; for equal tuples the smallest
 reward is kept): ``BellmanRows.aggregate(mdp, partition, reduce="min")``.
 
-**The optimum does not depend on the cost.** By Fact 2 of :mod:`lpbounds.rows`, the
+**The optimum does not depend on the cost.** By Fact 2 of :mod:`lpbounds.rows.system`, the
 feasible set ``G = {w : w(i) >= min_{t in (i,u)} q_t(w)}`` has a least element ``w*``,
 the fixed point of ``(Gw)(i) = max_u min_t q_t(w)`` (a zero-sum game: the controller
 picks ``u``, an adversary the term): if ``w`` is feasible then ``w >= Gw >= G^2 w >= ...
@@ -60,8 +60,8 @@ bracket ``lower_bound <= c'w* <= upper_bound`` and an iteration log:
 **Action sets.** A disjunction ``(i, u)`` is kept only when ``u`` is allowed at every
 state of ``S_i``: a state that forbids ``u`` contributes the term ``R_u(x) = -inf`` to
 the min over ``S_i``, so the disjunction says nothing (the proof is "Action sets" in
-:mod:`lpbounds.rows`). The rule lives in ``aggregate(reduce="min")``, so all four methods
-see the same rows; a partition whose states share no allowed action would have the
+:mod:`lpbounds.rows.aggregation`). The rule lives in ``aggregate(reduce="min")``, so all four
+methods see the same rows; a partition whose states share no allowed action would have the
 bound ``-inf`` and is refused with a :class:`~lpbounds.errors.ValidationError` naming it.
 
 **Certified results.** Whatever the method, the result's bounds come from the returned
@@ -179,7 +179,7 @@ class NLP:
     ``min c-bar'w  s.t.  w(i) >= min_{x in S_i} [R_u(x) + lambda sum_l p_l w(f-bar(x, u,
     Y_l))]`` for every (i, u); its optimum ``w*`` bounds ``V*`` from below on each
     partition: ``w*(i) <= min_{x in S_i} V*(x)``. ``w*`` is the same for every cost
-    ``c > 0`` (module docstring, Fact 2 of :mod:`lpbounds.rows`).
+    ``c > 0`` (module docstring, Fact 2 of :mod:`lpbounds.rows.system`).
 
     Parameters
     ----------
