@@ -39,4 +39,15 @@ class ConsistencyError(LPBoundsError, RuntimeError):
 
 class SizeLimitError(ValidationError):
     """A computation refused up front because the model exceeds a size limit (the message
-    names the size, the limit and the option that lifts it)."""
+    names the size, the limit and the option that lifts it).
+
+    Attributes
+    ----------
+    size, limit : int or None
+        The size asked for and the limit, when the raiser gives them (so that a caller,
+        the command line, can name its own option).
+    """
+
+    def __init__(self, message: str, *, size: int | None = None, limit: int | None = None):
+        super().__init__(message)
+        self.size, self.limit = size, limit

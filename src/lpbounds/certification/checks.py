@@ -38,6 +38,7 @@ __all__ = [
     "dp_interval",
     "lp_bracket",
     "lp_objective_bracket",
+    "separation",
 ]
 
 _TINY = float(np.finfo(np.float64).tiny)
@@ -243,7 +244,24 @@ def compare_at_least(a_lo: Any, a_hi: Any, b_lo: Any, b_hi: Any, accuracy: float
     return _make(verdict, width, dev, accuracy, int(np.argmax(shortfall)), arrs)
 
 
+def separation(c: Comparison) -> float:
+    """How far a comparison's deciding intervals are apart: ``max(a_lo - b_hi, b_lo -
+    a_hi)`` at its ``index`` (positive for a *violated* one: the proven size of the
+    violation there, which is the largest over its entries)."""
+    (a_lo, a_hi), (b_lo, b_hi) = c.a_interval, c.b_interval
+    with np.errstate(invalid="ignore", over="ignore"):
+        sep = max(a_lo - b_hi, b_lo - a_hi)
+    return float(sep) if np.isfinite(sep) else float("inf")
+
+
 def combine(comparisons: list[Comparison]) -> Comparison:
     """One comparison for several (e.g. one per cost): the worst one, by verdict
-    (violated > inconclusive > holds), then by ``width / accuracy``."""
-    return max(comparisons, key=lambda c: (_ORDER[c.verdict], c.width / max(c.accuracy, _TINY)))
+    (violated > inconclusive > holds); among violated ones the most violated (the largest
+    :func:`separation`), otherwise the largest ``width / accuracy``; the first of equals."""
+
+    def badness(c: Comparison) -> tuple[int, float]:
+        if c.verdict is Verdict.VIOLATED:
+            return _ORDER[c.verdict], separation(c)
+        return _ORDER[c.verdict], c.width / max(c.accuracy, _TINY)
+
+    return max(comparisons, key=badness)

@@ -5,7 +5,11 @@ Exit status 1 only when a claim is *violated* (the certified intervals prove it 
 
 With ``--out DIR`` it runs a campaign (:mod:`lpbounds.studies.campaign`): ``--random N``
 instances drawn from the families, records streamed to DIR per batch, resumed when the
-same command is run again, violated instances shrunk to model files."""
+same command is run again, violated instances shrunk to model files.
+
+With ``--arithmetic rational`` every claim is also decided exactly (holds or violated, never
+inconclusive; docs/exact.md), each solver's answer judged against the exact optimum, and
+``--certificates`` writes the proofs (``python -m lpbounds.exact.check`` verifies them)."""
 
 from __future__ import annotations
 
@@ -16,9 +20,9 @@ from rich import box
 from rich.markup import escape
 from rich.table import Table
 
-from ..errors import ValidationError
+from ..errors import SizeLimitError, ValidationError
 from ..text import fmt_number, fmt_sci
-from ..tolerances import LP_COMPARE_RTOL
+from ..tolerances import EXACT_MAX_VARIABLES, LP_COMPARE_RTOL
 from ._common import (
     console,
     err_console,
@@ -99,8 +103,39 @@ def register(sub: argparse._SubParsersAction) -> None:
         "theorem2, remark2, or a conjecture of your own as FILE.py:NAME or module:NAME "
         "(a Conjecture or a predicate over a Trial)",
     )
+    _add_exact_arguments(p)
     _add_campaign_arguments(p)
     p.set_defaults(func=run)
+
+
+def _add_exact_arguments(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("exact verdicts (rational arithmetic on the stored model)")
+    g.add_argument(
+        "--arithmetic",
+        choices=("float", "rational"),
+        default="float",
+        help="float (default): certified floating-point intervals (holds, violated or "
+        "inconclusive); rational: every claim also decided exactly (holds or violated), "
+        "each solver's answer judged against the exact optimum",
+    )
+    g.add_argument(
+        "--certificates",
+        nargs="?",
+        const=True,
+        default=None,
+        metavar="DIR",
+        help="with --arithmetic rational: write one certificate per decided claim and "
+        "instance into DIR (with --out: into DIR/certificates, no DIR given), checked by "
+        "python -m lpbounds.exact.check",
+    )
+    g.add_argument(
+        "--exact-size-limit",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="with --arithmetic rational: the most variables one exact solve takes "
+        f"(default {EXACT_MAX_VARIABLES}); a larger instance is refused before any work",
+    )
 
 
 def _add_campaign_arguments(p: argparse.ArgumentParser) -> None:
@@ -163,11 +198,34 @@ def _add_campaign_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _check_exact_arguments(args: argparse.Namespace) -> None:
+    """--certificates and --exact-size-limit need --arithmetic rational; --certificates
+    needs a DIR without --out, and none (or DIR/certificates) with it."""
+    from pathlib import Path
+
+    rational = args.arithmetic == "rational"
+    for opt, value in (("--certificates", args.certificates),
+                       ("--exact-size-limit", args.exact_size_limit)):  # fmt: skip
+        if value is not None and not rational:
+            raise ValidationError(f"{opt} belongs to exact verdicts: give --arithmetic rational")
+    cert = args.certificates
+    if args.out is None and cert is True:
+        raise ValidationError("--certificates: give the folder to write them into (DIR)")
+    if args.out is not None and isinstance(cert, str):
+        inside = Path(args.out) / "certificates"
+        if Path(cert).resolve() != inside.resolve():
+            raise ValidationError(
+                f"--certificates {cert!r}: a campaign writes its certificates into "
+                f"{str(inside)!r} (covered by its manifest): give --certificates alone"
+            )
+
+
 def run(args: argparse.Namespace) -> int:
     from ..formulations import resolve_solver
     from ..studies.claims import load_claim
     from ..studies.verify import default_solvers
 
+    _check_exact_arguments(args)
     claims = None if args.claims is None else [load_claim(c) for c in args.claims]
     if args.out is not None:
         return _run_campaign(args, claims)
@@ -205,29 +263,45 @@ def _run_models(args: argparse.Namespace, solvers: list[str], claims: list | Non
         None if args.model is None else [args.model], max_states=args.max_states
     )
     insts += random_instances(args.random, args.seed)
+    exact: dict[str, Any] = {}
+    if args.arithmetic == "rational":
+        exact = {
+            "arithmetic": "rational",
+            "exact_size_limit": args.exact_size_limit,
+            "certificates": args.certificates,
+        }
     records = []
     with progress() as prog:
         task = prog.add_task("verifying", total=len(insts) + 1, status="")
+
+        def say(msg: str) -> None:
+            prog.update(task, status=escape(msg))
+
         for inst in insts:
-            prog.update(task, description=f"verifying {inst.name}")
-            if checks:
-                records += verify_instance(
-                    inst,
-                    solvers,
-                    n_costs=args.costs,
-                    seed=args.seed,
-                    rtol=args.rtol,
-                    progress=lambda msg: prog.update(task, status=msg),
-                    checks=None if len(checks) == len(INSTANCE_CHECKS) else checks,
-                )
-            if conjectures:
-                records += run_claims(
-                    inst, conjectures, solvers, n_costs=args.costs, seed=args.seed, rtol=args.rtol
-                )
+            prog.update(task, description=f"verifying {escape(inst.name)}")
+            try:
+                if checks:
+                    records += verify_instance(
+                        inst,
+                        solvers,
+                        n_costs=args.costs,
+                        seed=args.seed,
+                        rtol=args.rtol,
+                        progress=say,
+                        checks=None if len(checks) == len(INSTANCE_CHECKS) else checks,
+                        **exact,
+                    )
+                if conjectures:
+                    records += run_claims(
+                        inst, conjectures, solvers, n_costs=args.costs, seed=args.seed,
+                        rtol=args.rtol, progress=say, **exact,
+                    )  # fmt: skip
+            except SizeLimitError as exc:
+                raise _size_refused(inst.name, exc) from None
             prog.advance(task)
         if remark2:
             prog.update(task, description="Remark 2 (soft aggregation)")
-            records += verify_remark2(solvers, seed=args.seed, rtol=args.rtol)
+            records += verify_remark2(solvers, seed=args.seed, rtol=args.rtol, **exact)
         prog.advance(task)
     for table in _records_tables(records):
         print_table(table)
@@ -240,7 +314,47 @@ def _run_models(args: argparse.Namespace, solvers: list[str], claims: list | Non
     if args.json:
         write_json(records, args.json)
     _say_errors(sum(r["verdict"] == "error" for r in records))
+    _say_exact(records, args)
     return exit_status(records, strict=args.strict)
+
+
+def _size_refused(name: str, exc: SizeLimitError) -> ValidationError:
+    """An instance above the exact size limit, in the command line's words: one line."""
+    if exc.size is None or exc.limit is None:
+        return exc
+    return ValidationError(
+        f"{name}: exact arithmetic solves {exc.size} variables together, above the limit of "
+        f"{exc.limit} (a dense rational solve grows as n^3); --exact-size-limit {exc.size} "
+        "lifts it"
+    )
+
+
+def _say_exact(records: list[dict], args: argparse.Namespace) -> None:
+    """Rational arithmetic: one line of what exact arithmetic decided beyond the float
+    intervals, and of the defects it found (a bracket that missed; a float *violated*
+    that holds exactly), and where the certificates are."""
+    if args.arithmetic != "rational":
+        return
+    from ..studies.verify import summarize
+
+    rows = summarize(records)
+    opened = sum(row.get("float_inconclusive", 0) for row in rows)
+    missed = sum(row.get("missed", 0) for row in rows)
+    disagree = sum(row.get("disagree", 0) for row in rows)
+    where = ""
+    if args.certificates:
+        names = {r["certificate"] for r in records if r.get("certificate")}
+        folder = args.out + "/certificates" if args.out else args.certificates
+        where = f"; {len(names):,} certificates in {folder}"
+    console.print(
+        f"exact: every claim decided in rational arithmetic; float intervals had left "
+        f"{_count(opened, 'record')} inconclusive; {_count(disagree, 'float verdict')} "
+        f"other than the exact one; {_count(missed, 'certified bracket')} outside its exact "
+        f"optimum{where}",
+        highlight=False,
+        soft_wrap=True,
+        markup=False,
+    )
 
 
 def _run_campaign(args: argparse.Namespace, claims: list | None) -> int:
@@ -283,6 +397,9 @@ def _run_campaign(args: argparse.Namespace, claims: list | None) -> int:
                 solvers=args.solvers,
                 n_costs=args.costs,
                 rtol=args.rtol,
+                arithmetic=args.arithmetic,
+                exact_size_limit=args.exact_size_limit,
+                certificates=args.certificates is not None,
                 out=out,
                 fmt=args.format,
                 batch_size=args.batch_size,
@@ -304,7 +421,30 @@ def _run_campaign(args: argparse.Namespace, claims: list | None) -> int:
             )
             raise
     _print_campaign(result)
+    _say_exact(result.records(), args)
+    _say_refused(result.records())
     return result.exit_status(strict=args.strict)
+
+
+def _say_refused(records: list[dict]) -> None:
+    """One line when instances were above the exact size limit (their records are
+    errors): how many, and the --exact-size-limit that lifts it for all."""
+    import re
+
+    sizes = {
+        r["instance"]: int(m.group(1))
+        for r in records
+        if (m := re.match(r"SizeLimitError: (\d+) variables", str(r.get("error", ""))))
+    }
+    if sizes:
+        err_console.print(
+            f"lpbounds verify: {len(sizes)} instance{'s' if len(sizes) != 1 else ''} above the "
+            "exact size limit, not decided (error records); --exact-size-limit "
+            f"{max(sizes.values())} lifts it",
+            highlight=False,
+            soft_wrap=True,
+            markup=False,
+        )
 
 
 #: Counterexamples listed on the console (the smallest first; all are in counterexamples.csv).
@@ -451,8 +591,22 @@ def _records_tables(records: list[dict]) -> list[Table]:
     return tables
 
 
+def _exact_note(r: dict) -> str:
+    """Rational arithmetic: the exact difference, the float verdict where it differs, and
+    the solves' exact error and whether their brackets held."""
+    if "float_verdict" not in r or r.get("exact_difference") is None:
+        return ""
+    parts = [f"exact difference {fmt_sci(r['exact_difference_float'])}"]
+    if r["float_verdict"] and r["float_verdict"] != str(r["verdict"]):
+        parts.append(f"float verdict {r['float_verdict']}")
+    if r.get("exact_error") is not None:
+        held = {True: "inside", False: "OUTSIDE"}.get(r["inside_bracket"], "no")
+        parts.append(f"solver off by {fmt_sci(r['exact_error_float'])}, {held} its bracket")
+    return "; ".join(parts) + "; "
+
+
 def _record_cells(r: dict) -> tuple[str, ...]:
-    detail = r["detail"]
+    detail = _exact_note(r) + r["detail"]
     if r.get("error"):
         detail = f"{detail}: {r['error']}" if detail else r["error"]
     if r["verdict"] == "violated":

@@ -307,7 +307,10 @@ def check_fixed_point(name: str, spec: dict, model: dict) -> None:
 def value(e: dict, found: dict, model: dict) -> tuple[list[int], int]:
     """The vector an expression names: ``{"of": id, "part": ...}`` with part ``"x"``
     (default), ``"objective"`` or ``"lp.<field>"`` (a vector of the LP's data), optionally
-    a ``slice`` of it and ``lift``-ed to states; or ``{"sum": [...]}`` of such vectors."""
+    a ``slice`` of it and ``lift``-ed to states; ``{"sum": [...]}`` of such vectors; or
+    ``{"vector": VECTOR}``, numbers stated in the file."""
+    if "vector" in e:  # numbers stated in the file (e.g. a conjecture's own values)
+        return vector(e["vector"], "comparison vector")
     if "sum" in e:
         parts = [value(t, found, model) for t in e["sum"]]
         num, den = parts[0]

@@ -34,8 +34,9 @@ integers; one common denominator, so that checking is integer arithmetic).
 
 ``COMPARISON``: ``{"claim", "left": EXPR, "right": EXPR, "relation": "==" | ">=" | ">",
 "difference": "p/q", "verdict"}`` with ``EXPR`` ``{"of": id, "part": "x" | "objective" |
-"lp.<field>", "slice": [a, b], "lift": bool}`` or ``{"sum": [EXPR, ...]}``; the difference
-is ``max |left - right|`` for ``==`` and ``min (left - right)`` otherwise.
+"lp.<field>", "slice": [a, b], "lift": bool}``, ``{"sum": [EXPR, ...]}`` or ``{"vector":
+VECTOR}`` (numbers stated in the file: a conjecture's own values, compared as given); the
+difference is ``max |left - right|`` for ``==`` and ``min (left - right)`` otherwise.
 """
 
 from __future__ import annotations

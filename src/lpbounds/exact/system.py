@@ -103,7 +103,9 @@ def check_size(n_block: int, size_limit: int | None, what: str, n_vars: int | No
         raise SizeLimitError(
             f"exact arithmetic on {what}: {n_block} variables solved together{part}, above "
             f"the limit of {limit} (a dense rational solve grows as n^3 on numbers of about "
-            f"n * 100 bits); pass size_limit={n_block} to lift it"
+            f"n * 100 bits); pass size_limit={n_block} to lift it",
+            size=n_block,
+            limit=limit,
         )
 
 

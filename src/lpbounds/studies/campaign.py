@@ -69,9 +69,28 @@ Shrinking
     written when it does not show the verdict), and each file is loaded back and the claim
     run on it again before it is reported (also a file from an earlier run).
 
+Rational arithmetic
+    With ``arithmetic="rational"`` every claim is also decided exactly on every instance
+    (:mod:`lpbounds.studies.verify`, "Rational arithmetic"): ``verdict`` is the exact one,
+    *holds* or *violated*, and the records add :data:`~lpbounds.studies.verify.EXACT_COLUMNS`
+    (``float_verdict``, the exact difference, each solve's ``inside_bracket`` and exact
+    error, ``certificate``). The arithmetic, ``exact_size_limit`` and ``certificates`` are
+    among the campaign's arguments in ``campaign.json``, so a resume never mixes
+    arithmetics. With ``certificates`` each decided claim's certificate is written into
+    ``out/certificates/`` (:func:`~lpbounds.studies.exact_claims.certificate_name`) and
+    listed with its SHA-256 in its batch's manifest entry: a resume checks them with the
+    batch (a certificate missing or changed: the batch is recomputed). An instance above
+    ``exact_size_limit`` gets an *error* record per claim and solver due, whose ``error``
+    is the one-line :class:`~lpbounds.errors.SizeLimitError` (size, limit, how to lift it):
+    its claims were not decided. Shrinking keeps a step only while the **exact** verdict
+    stays, and writes the counterexample's certificate beside its model file
+    (``counterexamples/<name>.certificate.json``).
+
 Record columns: :data:`CAMPAIGN_COLUMNS` (:data:`~lpbounds.studies.verify.RECORD_COLUMNS`,
-``error``, then the instance's :data:`INSTANCE_COLUMNS`); :data:`TIMING_COLUMNS` are the
-only ones that differ between two runs of one campaign. ``verdict`` is one of
+``error``, then the instance's :data:`INSTANCE_COLUMNS`; in rational arithmetic
+:func:`campaign_columns`, with the exact ones before ``error``); :data:`TIMING_COLUMNS`
+(and in rational arithmetic :data:`EXACT_TIMING_COLUMNS`) are the only ones that differ
+between two runs of one campaign. ``verdict`` is one of
 :data:`~lpbounds.studies.verify.OUTCOMES`: an *error* record (a predicate that raised,
 exited or returned no verdict; an instance that could not be built or checked) says why in
 ``error``.
@@ -92,7 +111,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._defaults import VERSION
-from ..errors import OutputError, SolverNotInstalledError, ValidationError
+from ..errors import OutputError, SizeLimitError, SolverNotInstalledError, ValidationError
 from ..formulations import resolve_solver
 from ..model.generators import garnet, random_partition
 from ..model.mdp import FiniteMDP
@@ -112,19 +131,20 @@ from .claims import (
 )
 from .shrink import shrink, size_of, write_model
 from .verify import (
+    EXACT_COLUMNS,
     INSTANCE_CHECKS,
     OUTCOMES,
     RECORD_COLUMNS,
     Record,
+    VerdictRecords,
     VerifyInstance,
+    check_arithmetic,
     check_exact_method,
     default_solvers,
     due_solvers,
-    error_record,
     exact_interval,
-    exit_status,
+    make_record,
     records_frame,
-    summarize,
 )
 
 if TYPE_CHECKING:  # annotations only
@@ -133,6 +153,8 @@ if TYPE_CHECKING:  # annotations only
 __all__ = [
     "CAMPAIGN_COLUMNS",
     "CAMPAIGN_FILE",
+    "CERTIFICATES_DIR",
+    "EXACT_TIMING_COLUMNS",
     "FAMILIES",
     "FAMILY_WEIGHTS",
     "FOLDER_VERSION",
@@ -145,12 +167,14 @@ __all__ = [
     "CampaignInstance",
     "CampaignResult",
     "Counterexample",
+    "campaign_columns",
     "campaign_instance",
     "draw_discount",
     "instance_plan",
     "read_records",
     "run_batch",
     "run_campaign",
+    "size_error",
 ]
 
 #: A campaign's progress: ``progress(done, total, note)`` after each batch on disk
@@ -182,6 +206,19 @@ CAMPAIGN_COLUMNS: tuple[str, ...] = (*RECORD_COLUMNS, "error", *INSTANCE_COLUMNS
 #: The columns that differ between two runs of one campaign (wall-clock measurements).
 TIMING_COLUMNS: tuple[str, ...] = ("solve_seconds", "compile_seconds")
 
+#: In rational arithmetic, the exact work's time: it too differs between two runs.
+EXACT_TIMING_COLUMNS: tuple[str, ...] = ("exact_seconds",)
+
+
+def campaign_columns(arithmetic: str = "float") -> tuple[str, ...]:
+    """Every column of a campaign's records in ``arithmetic``: :data:`CAMPAIGN_COLUMNS`,
+    and in rational arithmetic :data:`~lpbounds.studies.verify.EXACT_COLUMNS` before
+    ``error``."""
+    if arithmetic == "float":
+        return CAMPAIGN_COLUMNS
+    return (*RECORD_COLUMNS, *EXACT_COLUMNS, "error", *INSTANCE_COLUMNS)
+
+
 _STRING_COLUMNS = (
     "check",
     "claim",
@@ -195,6 +232,11 @@ _STRING_COLUMNS = (
     "family",
     "model",
     "partition_kind",
+    "float_verdict",
+    "exact_difference",
+    "inside_bracket",
+    "exact_error",
+    "certificate",
 )
 
 
@@ -413,6 +455,9 @@ class Batch:
     rtol: float
     seed: int
     exact_method: str = "pi"
+    arithmetic: str = "float"
+    exact_size_limit: int | None = None
+    certificates: str | None = None
 
     @property
     def stem(self) -> str:
@@ -462,8 +507,9 @@ def _in_record_order(claims: Sequence[Claim]) -> list[Claim]:
 def _not_checked(name: str, claims: Sequence[Claim], batch: Batch, error: str) -> list[Record]:
     """The *error* records of an instance whose claims could not be checked: one per
     (claim, solver) due, so that the claim still has its records."""
+    detail = "the instance could not be checked"
     return [
-        error_record(c.name, NOT_CHECKED, name, s, error, "the instance could not be checked")
+        make_record(c.name, NOT_CHECKED, name, s, None, detail, error=error)
         for c in _in_record_order(claims)
         for s in _solvers_of(c, batch)
     ]
@@ -471,6 +517,17 @@ def _not_checked(name: str, claims: Sequence[Claim], batch: Batch, error: str) -
 
 def _raised(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
+
+
+def size_error(exc: SizeLimitError) -> str:
+    """The ``error`` of the records of an instance above ``exact_size_limit``: one line
+    naming the size, the limit and the argument that lifts it."""
+    if exc.size is None or exc.limit is None:
+        return _raised(exc)
+    return (
+        f"SizeLimitError: {exc.size} variables solved together in exact arithmetic, above "
+        f"exact_size_limit={exc.limit}; exact_size_limit={exc.size} lifts it"
+    )
 
 
 def run_batch(batch: Batch) -> list[Record]:
@@ -483,12 +540,19 @@ def run_batch(batch: Batch) -> list[Record]:
     checks (its conjectures still run: each is sandboxed, :mod:`~lpbounds.studies.claims`).
     """
     claims = list(batch.claims)
+    exact: dict[str, Any] = {}
+    if batch.arithmetic != "float":
+        exact = {
+            "arithmetic": batch.arithmetic,
+            "exact_size_limit": batch.exact_size_limit,
+            "certificates": batch.certificates,
+        }
     if batch.number < 0:
-        records = run_remark2(claims, batch.solvers, seed=batch.seed, rtol=batch.rtol)
+        records = run_remark2(claims, batch.solvers, seed=batch.seed, rtol=batch.rtol, **exact)
         return [{**r, "campaign_index": -1} for r in records]
     builtin = [c for c in _in_record_order(claims) if isinstance(c, BuiltinClaim)]
     conjectures = [c for c in claims if isinstance(c, Conjecture)]
-    kw: dict[str, Any] = {"n_costs": batch.n_costs, "rtol": batch.rtol}
+    kw: dict[str, Any] = {"n_costs": batch.n_costs, "rtol": batch.rtol, **exact}
     kw["exact_method"] = batch.exact_method
     out: list[Record] = []
     for k, family, seed in batch.items:
@@ -500,28 +564,42 @@ def run_batch(batch: Batch) -> list[Record]:
             out += [{**r, "family": family, "seed": seed, "campaign_index": k} for r in found]
             continue
         found = []
-        if builtin:
-            try:
-                found += run_claims(inst, builtin, batch.solvers, seed=seed, **kw)
-            except Exception as exc:  # a crash of a built-in check: a finding too
-                found += _not_checked(name, builtin, batch, _raised(exc))
-        if conjectures:  # sandboxed: a predicate's crash is its record's error
-            found += run_claims(inst, conjectures, batch.solvers, seed=seed, **kw)
+        try:
+            if builtin:
+                try:
+                    found += run_claims(inst, builtin, batch.solvers, seed=seed, **kw)
+                except SizeLimitError:
+                    raise
+                except Exception as exc:  # a crash of a built-in check: a finding too
+                    found += _not_checked(name, builtin, batch, _raised(exc))
+            if conjectures:  # sandboxed: a predicate's crash is its record's error
+                found += run_claims(inst, conjectures, batch.solvers, seed=seed, **kw)
+        except SizeLimitError as exc:  # refused before any exact or LP work: not decided
+            found = _not_checked(name, claims, batch, size_error(exc))
         out += [{**r, **inst.params, "campaign_index": k} for r in found]
     return out
 
 
 # ---------------------------------------------------------------------- files
-def _frame(records: Sequence[Record]) -> pd.DataFrame:
-    """Records as a table of :data:`CAMPAIGN_COLUMNS` (missing entries empty)."""
+def _frame(records: Sequence[Record], columns: Sequence[str] = CAMPAIGN_COLUMNS) -> pd.DataFrame:
+    """Records as a table of ``columns`` (:func:`campaign_columns`; missing entries
+    empty)."""
     frame = records_frame(records)
-    for col in CAMPAIGN_COLUMNS:
+    for col in columns:
         if col not in frame:
             frame[col] = "" if col in _STRING_COLUMNS else np.nan
-    frame = frame[list(CAMPAIGN_COLUMNS)]
+    frame = frame[list(columns)]
     for col in _STRING_COLUMNS:
-        frame[col] = frame[col].fillna("").astype(str)
+        if col in frame:
+            frame[col] = frame[col].map(_text)
     return frame
+
+
+def _text(x: Any) -> str:
+    """A string column's entry: "" for a missing one (None, NaN), else its text."""
+    if x is None or (isinstance(x, float) and np.isnan(x)):
+        return ""
+    return str(x)
 
 
 def _write_frame(
@@ -554,7 +632,8 @@ def _read_frame(path: Path) -> pd.DataFrame:
 
     if path.suffix == ".parquet":
         return pd.read_parquet(path)
-    numeric = [c for c in CAMPAIGN_COLUMNS if c not in _STRING_COLUMNS]
+    every = dict.fromkeys((*CAMPAIGN_COLUMNS, *EXACT_COLUMNS))
+    numeric = [c for c in every if c not in _STRING_COLUMNS]
     return pd.read_csv(
         path,
         dtype={c: str for c in _STRING_COLUMNS},
@@ -586,6 +665,16 @@ CAMPAIGN_FILE = "campaign.json"
 MANIFEST_FILE = "manifest.json"
 #: Where files that fail their check on resume are moved (never deleted).
 REJECTED_DIR = "rejected"
+#: Where a rational campaign's certificates are written (``certificates=True``).
+CERTIFICATES_DIR = "certificates"
+
+#: The value of an argument a campaign folder written before it existed stands for (such a
+#: folder resumes in floating point).
+_ARGUMENT_DEFAULTS: dict[str, Any] = {
+    "arithmetic": "float",
+    "exact_size_limit": None,
+    "certificates": False,
+}
 
 #: A note of a campaign for its user, one line (a batch recomputed, a counterexample not
 #: reproduced): ``notify(line)``.
@@ -633,6 +722,11 @@ def _checked_manifest(path: Path, data: dict[str, Any]) -> dict[str, dict[str, A
             and _HEX.fullmatch(e["sha256"]) is not None
             and isinstance(e.get("lpbounds"), str)
             and isinstance(e.get("claims"), dict)
+            and isinstance(e.get("certificates", {}), dict)
+            and all(
+                isinstance(h, str) and _HEX.fullmatch(h) is not None
+                for h in e.get("certificates", {}).values()
+            )
         )
         if not ok:
             raise _unreadable(path, f"its entry {stem!r} is malformed")
@@ -689,6 +783,8 @@ class _Folder:
         path, stem = self.file(batch.stem), batch.stem
         before = self.entries.get(stem)
 
+        certs = self.certificate_hashes(frame)
+
         def record(digest: str) -> None:
             self.entries[stem] = {
                 "file": path.name,
@@ -697,6 +793,7 @@ class _Folder:
                 "sha256": digest,
                 "lpbounds": VERSION,
                 "claims": {c.name: self.fingerprints[c.name] for c in batch.claims},
+                **({"certificates": certs} if certs else {}),
             }
             try:
                 self.save_manifest()
@@ -708,6 +805,27 @@ class _Folder:
                 raise
 
         _write_frame(frame, path, record)
+
+    def certificate_hashes(self, frame: pd.DataFrame) -> dict[str, str]:
+        """The SHA-256 of every certificate the records name (``certificates/``)."""
+        if "certificate" not in frame:
+            return {}
+        names = sorted({str(t) for t in frame["certificate"] if isinstance(t, str) and t})
+        return {n: file_sha256(self.path / CERTIFICATES_DIR / n) for n in names}
+
+    def bad_certificate(self, stem: str) -> tuple[Path, str] | None:
+        """The first certificate of a batch's manifest entry that is missing or differs
+        from its SHA-256 there, and what is wrong; None when all match."""
+        for name, digest in self.entries.get(stem, {}).get("certificates", {}).items():
+            path = self.path / CERTIFICATES_DIR / name
+            if not path.exists():
+                return path, f"names the certificate {CERTIFICATES_DIR}/{name}, which is missing"
+            if file_sha256(path) != digest:
+                return path, (
+                    f"names the certificate {CERTIFICATES_DIR}/{name}, which does not match "
+                    "the manifest (its SHA-256 differs)"
+                )
+        return None
 
     def aside(self, path: Path) -> Path:
         """Move ``path`` into ``rejected/`` under a free name (never over another)."""
@@ -744,6 +862,9 @@ class _Folder:
         ks = {-1} if batch.number < 0 else {k for k, _, _ in batch.items}
         if not set(frame["campaign_index"].astype(int)) <= ks:
             return None, "holds records of instances outside it"
+        bad = self.bad_certificate(batch.stem)
+        if bad is not None:
+            return None, bad[1]
         return frame, ""
 
 
@@ -799,13 +920,14 @@ def _open_folder(
         isinstance(args, dict) and isinstance(version, str) and isinstance(old_fps, dict)
     ):
         raise _unreadable(out / CAMPAIGN_FILE, f"not a campaign file of layout {FOLDER_VERSION}")
-    diff = [k for k in params if args.get(k) != params[k]]
+    known = {**_ARGUMENT_DEFAULTS, **args}
+    diff = [k for k in dict.fromkeys((*params, *args)) if known.get(k) != params.get(k)]
     if diff:
         k = diff[0]
         raise ValidationError(
             f"out: {str(out)!r} holds a campaign with other arguments ({k} = "
-            f"{args.get(k)!r}, now {params[k]!r}): rerun with its arguments to resume it, "
-            "or give another folder"
+            f"{known.get(k)!r}, now {params.get(k)!r}): rerun with its arguments to resume "
+            "it, or give another folder"
         )
     entries = _checked_manifest(out / MANIFEST_FILE, _read_json(out / MANIFEST_FILE))
     changed = [("lpbounds", f"{version} then, {VERSION} now")] if version != VERSION else []
@@ -885,7 +1007,7 @@ def _merge(old: pd.DataFrame, new: pd.DataFrame, batch: Batch, redone: set[str])
         "g": both["check"].map(lambda c: group.get(c, 0)),
     })  # fmt: skip
     order = key.sort_values(["k", "g"], kind="stable").index
-    return both.loc[order].reset_index(drop=True)[list(CAMPAIGN_COLUMNS)]
+    return both.loc[order].reset_index(drop=True)[list(old.columns)]
 
 
 @dataclass
@@ -921,6 +1043,9 @@ def _plan_work(folder: _Folder, batches: list[Batch], note: CampaignNote) -> lis
             continue
         frame, why = folder.read(b)
         if frame is None:
+            bad = folder.bad_certificate(b.stem)
+            if bad is not None and bad[0].exists():
+                note(f"{_rel(folder, bad[0])} moved to {_rel(folder, folder.aside(bad[0]))}")
             gone = f": moved to {_rel(folder, folder.aside(path))}" if path.exists() else ""
             folder.entries.pop(b.stem, None)
             note(f"{path.name} {why}{gone}; it is recomputed")
@@ -1026,7 +1151,7 @@ def _run_batches(
         w = by_stem[batch.stem]
         what = f"{len(records)} records"
         if folder is not None:
-            frame = _frame(records)
+            frame = _frame(records, campaign_columns(batch.arithmetic))
             if w.redo is not None and w.kept is not None:
                 frame, what = _merge(w.kept, frame, w.batch, w.redo), f"{what} redone"
             folder.write(w.batch, frame)
@@ -1044,7 +1169,7 @@ def _run_batches(
     due = sum(len(b.due()) for b in batches)
     if folder is None:
         records = [r for b in batches for r in kept.get(b.stem, [])]
-        frame = _frame(records)
+        frame = _frame(records, campaign_columns(batches[0].arithmetic if batches else "float"))
         return _Ran(frame, len(pending), due, _missing(batches, _present(frame)))
     frames: dict[str, pd.DataFrame] = {}
     for b in batches:  # every batch read back and checked against the manifest
@@ -1095,6 +1220,9 @@ class Counterexample:
         The shrunk instance.
     path : Path or None
         Its model file (``out/counterexamples/*.toml``), None without ``out``.
+    certificate : Path or None
+        Rational arithmetic: the certificate of the verdict on the shrunk instance
+        (``out/counterexamples/*.certificate.json``), when the claim's record has one.
     """
 
     instance: str
@@ -1109,6 +1237,7 @@ class Counterexample:
     mdp: FiniteMDP
     partition: Partition
     path: Path | None = None
+    certificate: Path | None = None
 
     def row(self) -> dict[str, Any]:
         """A flat row (``counterexamples.csv``): sizes as ``states``, ``states_before``, ..."""
@@ -1122,6 +1251,8 @@ class Counterexample:
             steps=self.steps,
             path="" if self.path is None else str(self.path),
         )
+        if self.certificate is not None:
+            out["certificate"] = str(self.certificate)
         return out
 
 
@@ -1142,29 +1273,51 @@ class _Target:
     rtol: float
     seed: int
     exact_method: str
+    arithmetic: str = "float"
+    exact_size_limit: int | None = None
 
-    def __call__(self, mdp: FiniteMDP, partition: Partition) -> bool:
+    def records(
+        self,
+        mdp: FiniteMDP,
+        partition: Partition,
+        name: str = "candidate",
+        certificates: Any = None,
+    ) -> list[Record]:
+        """The claim's records on an instance (for the record's solver), the kept one
+        first; raises what the claim raises."""
         if self.solver == "all":
             solvers: tuple[str, ...] = self.solvers
         else:
             solvers = () if self.solver == "exact" else (self.solver,)
-        inst = VerifyInstance("candidate", mdp, partition)
+        found = run_claims(
+            VerifyInstance(name, mdp, partition),
+            [self.claim],
+            solvers,
+            n_costs=self.n_costs,
+            seed=self.seed,
+            rtol=self.rtol,
+            exact_method=self.exact_method,
+            arithmetic=self.arithmetic,
+            exact_size_limit=self.exact_size_limit,
+            certificates=certificates,
+        )
+        return sorted(found, key=lambda r: not self.shows(r))
+
+    def shows(self, record: Record) -> bool:
+        """Whether a record is the kept one: its claim and solver, with the verdict kept
+        (in rational arithmetic the exact verdict)."""
+        return bool(
+            record["claim"] == self.text
+            and record["solver"] == self.solver
+            and str(record["verdict"]) == self.verdict
+        )
+
+    def __call__(self, mdp: FiniteMDP, partition: Partition) -> bool:
         try:
-            found = run_claims(
-                inst,
-                [self.claim],
-                solvers,
-                n_costs=self.n_costs,
-                seed=self.seed,
-                rtol=self.rtol,
-                exact_method=self.exact_method,
-            )
+            found = self.records(mdp, partition)
         except Exception:  # a candidate the claim cannot be checked on shows nothing
             return False
-        return any(
-            r["claim"] == self.text and r["solver"] == self.solver and r["verdict"] == self.verdict
-            for r in found
-        )
+        return bool(found) and self.shows(found[0])
 
 
 def _stem_of(row: dict[str, Any]) -> str:
@@ -1175,7 +1328,7 @@ def _stem_of(row: dict[str, Any]) -> str:
     return f"{stem}-{digest}"
 
 
-def _load_counterexample(head: dict[str, str], folder: Path, stem: str) -> Counterexample | None:
+def _load_counterexample(head: dict[str, Any], folder: Path, stem: str) -> Counterexample | None:
     """An earlier run's counterexample of this record from its files (None when they are
     absent, unreadable or of another record)."""
     from ..model.instances import load_instance
@@ -1218,10 +1371,32 @@ def _confirmed(cex: Counterexample, target: _Target) -> bool:
     return bool(same and np.array_equal(part.labels, cex.partition.labels) and target(mdp, part))
 
 
+#: The suffix of a counterexample's certificate beside its model file (rational arithmetic).
+CERTIFICATE_SUFFIX = ".certificate.json"
+
+
+def _certified(cex: Counterexample, target: _Target, folder: Path, stem: str) -> Counterexample:
+    """Rational arithmetic: the counterexample with the certificate of its record on the
+    shrunk instance (``<stem>.certificate.json``, written anew; the claim run once more,
+    its certificates into a temporary folder beside it), when the record has one."""
+    import tempfile
+
+    if target.arithmetic == "float":
+        return cex
+    with tempfile.TemporaryDirectory(dir=folder, prefix=".certificates-") as tmp:
+        found = target.records(cex.mdp, cex.partition, name=stem, certificates=tmp)
+        name = found[0].get("certificate") if found and target.shows(found[0]) else None
+        if not name:
+            return cex
+        dest = folder / f"{stem}{CERTIFICATE_SUFFIX}"
+        os.replace(Path(tmp) / str(name), dest)
+    return replace(cex, certificate=dest)
+
+
 def _set_aside(folder: Path, stem: str) -> str:
     """Move a counterexample's files into ``counterexamples/rejected/``; where to."""
     where = folder / REJECTED_DIR
-    for suffix in (".toml", ".json"):
+    for suffix in (".toml", ".json", CERTIFICATE_SUFFIX):
         path = folder / f"{stem}{suffix}"
         if path.exists():
             where.mkdir(exist_ok=True)
@@ -1244,12 +1419,14 @@ def _shrink_one(
     when the record's verdict does not show on its instance when re-checked. A model
     file is reported only once it is loaded back and shows the verdict again."""
     stem = _stem_of(row)
-    head = {k: str(row[k]) for k in ("instance", "check", "claim", "solver", "verdict")}
+    head: dict[str, Any] = {
+        k: str(row[k]) for k in ("instance", "check", "claim", "solver", "verdict")
+    }
     what = f"{row['instance']}: {row['check']} ({row['solver']}) {row['verdict']}"
     if folder is not None and (folder / f"{stem}.json").exists():
         earlier = _load_counterexample(head, folder, stem)
         if earlier is not None and _confirmed(earlier, target):
-            return earlier
+            return _certified(earlier, target, folder, stem)
         where = _set_aside(folder, stem)
         note(
             f"the counterexample of {what} on disk does not show it: moved to {where}; shrunk again"
@@ -1277,6 +1454,7 @@ def _shrink_one(
                 f"the counterexample of {what} does not show it when loaded back: moved to {where}"
             )
             return None
+        return _certified(cex, target, cex.path.parent, stem)
     return cex
 
 
@@ -1296,8 +1474,9 @@ def _write_counterexample(cex: Counterexample, row: dict[str, Any]) -> None:
         f"{int(row['seed'])})",
     ]
     if cex.check in INSTANCE_CHECKS and cex.solver not in ("exact", "all"):
+        exact = " --arithmetic rational" if "float_verdict" in row else ""
         header.append(
-            f"check it: lpbounds verify {cex.path.name} --random 0 --solvers {cex.solver}"
+            f"check it: lpbounds verify {cex.path.name} --random 0 --solvers {cex.solver}{exact}"
         )
     write_model(cex.path, cex.mdp, cex.partition, header)
     side = cex.row()
@@ -1340,6 +1519,8 @@ def _shrink_all(
             run["rtol"],
             int(row["seed"]),
             run["exact_method"],
+            run.get("arithmetic", "float"),
+            run.get("exact_size_limit"),
         )
         cex = _shrink_one(row, target, folder, max_seconds, note)
         if cex is not None:
@@ -1350,13 +1531,13 @@ def _shrink_all(
 # ---------------------------------------------------------------------- the campaign
 # ---------------------------------------------------------------------- the campaign
 @dataclass(repr=False)
-class CampaignResult:
+class CampaignResult(VerdictRecords):
     """A campaign's records, counterexamples and how it was run.
 
     Attributes
     ----------
     frame : pandas.DataFrame
-        One row per (instance, claim, solver), columns :data:`CAMPAIGN_COLUMNS`.
+        One row per (instance, claim, solver), columns :func:`campaign_columns`.
     params : dict
         The arguments that define the campaign (``campaign.json``).
     counterexamples : list of Counterexample
@@ -1402,26 +1583,18 @@ class CampaignResult:
         )
 
     def records(self) -> list[Record]:
-        """The records as dicts (flat: :data:`CAMPAIGN_COLUMNS`)."""
+        """The records as dicts (flat: :func:`campaign_columns`)."""
         return list(self.frame.to_dict("records"))
 
-    def verdicts(self) -> dict[str, int]:
-        """How many records have each outcome (:data:`~lpbounds.studies.verify.OUTCOMES`:
-        the three verdicts and "error")."""
-        col = self.frame["verdict"]
-        return {w: int((col == w).sum()) for w in OUTCOMES}
+    def record_list(self) -> list[Record]:
+        """The records (:class:`~lpbounds.studies.verify.VerdictRecords`: ``verdicts()``,
+        ``summary()`` and ``exit_status()``, which also fails when records due are
+        missing)."""
+        return self.records()
 
-    def summary(self) -> pd.DataFrame:
-        """One row per (claim, solver): verdict counts and the worst record
-        (:func:`~lpbounds.studies.verify.summarize`)."""
-        import pandas as pd
-
-        return pd.DataFrame.from_records(summarize(self.records()))
-
-    def exit_status(self, strict: bool = False) -> int:
-        """1 if a record is *violated* or an *error*, or records due are missing (with
-        ``strict``, also if one is *inconclusive*), else 0."""
-        return 1 if self.missing else exit_status(self.records(), strict=strict)
+    def incomplete(self) -> bool:
+        """Whether records due are missing from the folder."""
+        return bool(self.missing)
 
 
 def _check_params(
@@ -1449,18 +1622,51 @@ def _check_params(
     return list(dict.fromkeys(chosen))
 
 
-def _batches(params: dict[str, Any], claims: Sequence[Claim]) -> list[Batch]:
+def _check_exact(
+    arithmetic: Any, size_limit: Any, certificates: Any, out: str | Path | None
+) -> None:
+    """The exact arguments: a known arithmetic; a size limit and certificates only in
+    rational arithmetic (certificates with ``out``)."""
+    from ..validation import check_int
+
+    check_arithmetic(arithmetic)
+    if size_limit is not None:
+        check_int("exact_size_limit", size_limit, lo=1)
+    if arithmetic == "float" and (size_limit is not None or certificates):
+        what = "exact_size_limit" if size_limit is not None else "certificates"
+        raise ValidationError(f"{what} belongs to arithmetic='rational'")
+    if certificates and out is None:
+        raise ValidationError(
+            "certificates: a campaign writes them into out/certificates; give out"
+        )
+
+
+def _batches(
+    params: dict[str, Any], claims: Sequence[Claim], out: Path | None = None
+) -> list[Batch]:
     plan = instance_plan(params["n"], params["seed"], params["families"])
     size = params["batch_size"]
-    common = (tuple(claims), tuple(params["solvers"]), params["n_costs"], params["rtol"])
-    method = params["exact_method"]
-    out = [
-        Batch(b, tuple(plan[i : i + size]), *common, params["seed"], method)
+    certificates = None
+    if params["certificates"] and out is not None:
+        certificates = str(out / CERTIFICATES_DIR)
+    common: dict[str, Any] = {
+        "claims": tuple(claims),
+        "solvers": tuple(params["solvers"]),
+        "n_costs": params["n_costs"],
+        "rtol": params["rtol"],
+        "seed": params["seed"],
+        "exact_method": params["exact_method"],
+        "arithmetic": params["arithmetic"],
+        "exact_size_limit": params["exact_size_limit"],
+        "certificates": certificates,
+    }
+    batches = [
+        Batch(b, tuple(plan[i : i + size]), **common)
         for b, i in enumerate(range(0, len(plan), size))
     ]
     if REMARK2 in params["claims"]:
-        out.append(Batch(-1, (), *common, params["seed"], method))
-    return out
+        batches.append(Batch(-1, (), **common))
+    return batches
 
 
 def run_campaign(
@@ -1473,6 +1679,9 @@ def run_campaign(
     n_costs: int = 3,
     rtol: float = LP_COMPARE_RTOL,
     exact_method: str = "pi",
+    arithmetic: str = "float",
+    exact_size_limit: int | None = None,
+    certificates: bool = False,
     out: str | Path | None = None,
     fmt: str = "csv",
     batch_size: int = 10,
@@ -1505,6 +1714,15 @@ def run_campaign(
     n_costs, rtol, exact_method
         As for :func:`~lpbounds.studies.verify.verify_instance` (``exact_method``: policy
         iteration by default, fast on small models at every discount).
+    arithmetic : {"float", "rational"}
+        ``"rational"``: every claim also decided exactly (see the module docstring).
+    exact_size_limit : int, optional
+        ``"rational"``: the most variables one exact solve takes (default
+        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`); an instance above it gets
+        *error* records saying so.
+    certificates : bool
+        ``"rational"`` with ``out``: write every decided claim's certificate into
+        ``out/certificates/`` (listed in the manifest, checked on resume).
     out : str or Path, optional
         The campaign's folder: batches are written there as they finish, each with its
         manifest entry, and a rerun with the same arguments resumes, checking every batch
@@ -1558,6 +1776,7 @@ def run_campaign(
     t0 = time.perf_counter()
     chosen = _check_params(n, seed, families, batch_size, n_costs, rtol)
     check_exact_method(exact_method)
+    _check_exact(arithmetic, exact_size_limit, certificates, out)
     _check_parquet(fmt)
     claim_list = resolve_claims(claims)
     names = [resolve_solver(s) for s in (default_solvers() if solvers is None else solvers)]
@@ -1571,11 +1790,14 @@ def run_campaign(
         "n_costs": int(n_costs),
         "rtol": float(rtol),
         "exact_method": exact_method,
+        "arithmetic": arithmetic,
+        "exact_size_limit": None if exact_size_limit is None else int(exact_size_limit),
+        "certificates": bool(certificates),
         "batch_size": int(batch_size),
         "format": fmt,
     }
     fps = {c.name: claim_fingerprint(c) for c in claim_list}
-    batches = _batches(params, claim_list)
+    batches = _batches(params, claim_list, None if out is None else Path(out))
     notes: list[str] = []
 
     def note(line: str) -> None:

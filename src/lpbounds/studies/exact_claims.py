@@ -31,6 +31,7 @@ own difference; the verdict holds when all hold.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import time
@@ -56,8 +57,10 @@ from ..status import Verdict
 __all__ = [
     "EXACT_CHECKS",
     "ExactInstance",
+    "ExactJudge",
     "ExactVerdict",
     "SolverJudgement",
+    "certificate_name",
     "comparison",
     "decide_remark2",
     "exact_verdict",
@@ -183,6 +186,57 @@ def _spec_key(spec: dict[str, Any]) -> str:
     return json.dumps(spec, sort_keys=True)
 
 
+def _without_partition(model: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in model.items() if k != "partition"}
+
+
+class ExactJudge:
+    """Judges float solves against exact optima, each LP's computed once (by its spec).
+
+    Parameters
+    ----------
+    size_limit : int, optional
+        As for :class:`ExactInstance`.
+    route : callable(form, spec) -> ExactLP or None, optional
+        Where an LP's exact optimum can be had more cheaply (an instance's fixed points);
+        None falls back to ``form.exact_optimum()``.
+    """
+
+    def __init__(
+        self,
+        size_limit: int | None = None,
+        route: Callable[[Formulation, dict[str, Any]], ExactLP | None] | None = None,
+    ) -> None:
+        self.size_limit = size_limit
+        self.route = route
+        self._cache: dict[str, ExactLP] = {}
+
+    def exact(self, form: Formulation) -> ExactLP:
+        """The exact optimum of ``form``'s LP (computed once per LP)."""
+        if not hasattr(form, "exact_lp"):
+            return form.exact_optimum(size_limit=self.size_limit)
+        _, spec = form.exact_lp()
+        key = _spec_key(spec)
+        if key not in self._cache:
+            found = None if self.route is None else self.route(form, spec)
+            self._cache[key] = found or form.exact_optimum(size_limit=self.size_limit)
+        return self._cache[key]
+
+    def __call__(self, form: Formulation, result: LPResult) -> SolverJudgement:
+        """``result`` (a float solve of ``form``) judged: whether its certified bracket
+        held, and its exact error."""
+        judged = form.judge_exact(self.exact(form), result, size_limit=self.size_limit)
+        return SolverJudgement(
+            form.name,
+            result.solver,
+            str(result.status),
+            judged.inside_bracket,
+            judged.error,
+            judged.objective_error,
+            judged,
+        )
+
+
 class ExactInstance:
     """One instance of a verification run, in exact arithmetic.
 
@@ -237,6 +291,7 @@ class ExactInstance:
         self.model = mdp_data(mdp, partition)
         self._cache: dict[str, ExactLP] = {}
         self._fixed: dict[str, ExactFixedPoint] = {}
+        self._judge = ExactJudge(size_limit, self._route)
 
     # ------------------------------------------------------------------ exact pieces
     def _say(self, what: str) -> None:
@@ -331,25 +386,29 @@ class ExactInstance:
     # ------------------------------------------------------------------ judging solvers
     def judge(self, form: Formulation, result: LPResult) -> SolverJudgement:
         """A float solve of ``form`` (an LP of this instance, or any formulation with an
-        exact route) judged against its exact optimum (computed once per LP)."""
+        exact route) judged against its exact optimum (computed once per LP; the
+        instance's own LPs from its exact fixed points)."""
+        return self._judge(form, result)
+
+    def exact_lp(self, form: Formulation) -> ExactLP:
+        """The exact optimum of ``form``'s LP (computed once per LP; this instance's own
+        LPs from its exact fixed points)."""
+        return self._judge.exact(form)
+
+    def owns(self, form: Formulation) -> bool:
+        """Whether ``form``'s exact LP is built on this instance's model (so that it can
+        stand in this instance's certificates)."""
         if not hasattr(form, "exact_lp"):
-            exact = form.exact_optimum(size_limit=self.size_limit)
-        else:
-            _, spec = form.exact_lp()
-            key = _spec_key(spec)
-            if key not in self._cache:
-                self._cache[key] = form.exact_optimum(size_limit=self.size_limit)
-            exact = self._cache[key]
-        judged = form.judge_exact(exact, result, size_limit=self.size_limit)
-        return SolverJudgement(
-            form.name,
-            result.solver,
-            str(result.status),
-            judged.inside_bracket,
-            judged.error,
-            judged.objective_error,
-            judged,
-        )
+            return False
+        model, _ = form.exact_lp()
+        return bool(model == self.model or model == _without_partition(self.model))
+
+    def _route(self, form: Formulation, spec: dict[str, Any]) -> ExactLP | None:
+        """The exact optimum of ``form``'s LP from this instance's fixed points when it is
+        one of its LPs (ELP, RLP, IB, LLP, SLP on its model), else None."""
+        if spec.get("formulation") not in ("ELP", "RLP", "IB", "LLP", "SLP"):
+            return None
+        return self.optimum(spec) if self.owns(form) else None
 
     # ------------------------------------------------------------------ the claims
     def decide(self, checks: Iterable[str] | None = None) -> list[ExactVerdict]:
@@ -569,13 +628,28 @@ def decide_remark2(
     return out
 
 
+def certificate_name(instance: str, check: str) -> str:
+    """The file name of the certificate of ``check`` on ``instance``:
+    ``<instance>--<check>.json``, each part with every run of characters other than
+    letters, digits and ``._=+-`` written ``_``, and followed by ``-`` and 6 hex digits of
+    its SHA-256 when it held other characters than those, spaces and ``:`` (so that two
+    names never share a file: ``"V >= W"`` and ``"V = W"``)."""
+
+    def part(text: str) -> str:
+        slug = re.sub(r"[^A-Za-z0-9._=+-]+", "_", text).strip("_")
+        if re.fullmatch(r"[A-Za-z0-9._=+: -]*", text):
+            return slug
+        return f"{slug}-{hashlib.sha256(text.encode()).hexdigest()[:6]}"
+
+    return f"{part(instance)}--{part(check)}.json"
+
+
 def write_certificates(verdicts: Iterable[ExactVerdict], directory: str | Path) -> list[Path]:
-    """Write one certificate per verdict into ``directory`` (created), named
-    ``<instance>--<check>.json``; returns the paths."""
+    """Write one certificate per verdict into ``directory`` (created), named by
+    :func:`certificate_name`; returns the paths."""
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for v in verdicts:
-        stem = re.sub(r"[^A-Za-z0-9._=+-]+", "_", f"{v.instance}--{v.check}").strip("_")
-        paths.append(write_certificate(out / f"{stem}.json", v.certificate))
-    return paths
+    return [
+        write_certificate(out / certificate_name(v.instance, v.check), v.certificate)
+        for v in verdicts
+    ]

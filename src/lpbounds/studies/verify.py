@@ -73,15 +73,32 @@ the others with zeros):
   OPT(c2)`` (in general ``>=``), so ``lower(OPT(c1 + c2)) > upper(OPT(c1)) +
   upper(OPT(c2))`` proves that the optimum depends on the cost (*holds*); otherwise
   *inconclusive* (never *violated*: a failure to show a difference proves nothing).
+
+Rational arithmetic (``arithmetic="rational"``)
+    Every claim is also decided *exactly* on the stored model
+    (:mod:`lpbounds.studies.exact_claims`: exact fixed points, exact LP optima proved by
+    exact primal and dual points, docs/exact.md), and the records say so: the same
+    records as in floating point, each with ``verdict`` the **exact** verdict (*holds* or
+    *violated*, never *inconclusive*) of the exact comparisons its claim rests on
+    (:data:`EXACT_OF_CLAIM`), and the columns :data:`EXACT_COLUMNS`: ``float_verdict``
+    (the floating-point verdict the record had), ``exact_difference`` (``"p/q"``: ``max
+    |left - right|`` of an equality, ``min (left - right)`` of an inequality, negative
+    when violated) and its nearest double ``exact_difference_float``, ``exact_seconds``
+    (the exact work of the claim), ``certificate`` (the file proving it, when written),
+    and per solver ``inside_bracket`` (whether every certified bracket of the record's
+    solves contained its LP's exact optimum) and ``exact_error`` (``"p/q"``: the largest
+    ``max |values - exact values|`` of those solves) with ``exact_error_float``. Records
+    without an LP solve have these two empty. The floating-point records and columns are
+    unchanged.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NamedTuple, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -97,7 +114,7 @@ from ..certification.checks import (
 )
 from ..dp import exact_rows, solve_exact
 from ..errors import ConvergenceError, LPBoundsError, ValidationError
-from ..exact.rationals import solve_rational
+from ..exact.rationals import fraction_text, solve_rational
 from ..formulations import (
     ELP,
     IB,
@@ -119,21 +136,27 @@ from ..status import Verdict
 from ..tolerances import LP_COMPARE_RTOL, dp_scale
 
 __all__ = [
+    "ARITHMETICS",
     "ERROR",
+    "EXACT_COLUMNS",
     "EXACT_METHODS",
+    "EXACT_OF_CLAIM",
     "INSTANCE_CHECKS",
     "OUTCOMES",
     "RECORD_COLUMNS",
     "RELIABLE_LP_SOLVERS",
     "Tally",
+    "VerdictRecords",
     "VerifyInstance",
     "VerifyResult",
     "alp_value_bracket",
+    "check_arithmetic",
     "check_exact_method",
     "default_solvers",
     "due_solvers",
     "error_record",
     "estimated_states",
+    "exact_instance",
     "exact_interval",
     "exit_status",
     "flat_record",
@@ -152,6 +175,8 @@ __all__ = [
 
 if TYPE_CHECKING:  # annotations only
     import pandas as pd
+
+    from .exact_claims import ExactInstance, ExactVerdict, SolverJudgement
 
 Record = dict[str, Any]
 Progress = Callable[[str], None]
@@ -189,6 +214,54 @@ OUTCOMES: tuple[str, ...] = ("holds", "inconclusive", "violated", ERROR)
 
 #: The checks whose records include one of solver "exact" (solver-free) on every instance.
 _EXACT_CHECKS = ("Lemma 1", "Theorem 1", "Theorem 2")
+
+#: The arithmetics of a verification: ``"float"`` (certified floating-point intervals:
+#: *holds*, *violated* or *inconclusive*) and ``"rational"`` (every claim also decided
+#: exactly; see the module docstring).
+ARITHMETICS: tuple[str, ...] = ("float", "rational")
+
+#: The columns a record has in rational arithmetic, after the floating-point ones (see the
+#: module docstring).
+EXACT_COLUMNS: tuple[str, ...] = (
+    "float_verdict",
+    "exact_difference",
+    "exact_difference_float",
+    "exact_seconds",
+    "inside_bracket",
+    "exact_error",
+    "exact_error_float",
+    "certificate",
+)
+
+#: In rational arithmetic, the exact comparisons (of the check's
+#: :class:`~lpbounds.studies.exact_claims.ExactVerdict`) a record's claim rests on: its
+#: ``(check, claim)`` -> the start of their names; a claim not listed rests on all of its
+#: check's (Theorem 1's, Lemma 2's).
+EXACT_OF_CLAIM: dict[tuple[str, str], str] = {
+    ("Lemma 1", "Phi v* >= V*"): "Phi v*",
+    ("Lemma 1", "optimal value = c'(exact)"): "ELP",
+    ("Lemma 1", "optimum = exact (c > 0)"): "ELP",
+    ("Theorem 2", "fixed point of IB = (v*, ..., v*)"): "IB",
+    ("Theorem 2", "IB blocks = v*"): "IB",
+    ("Theorem 2", "IB feasible point >= v*"): "IB",
+    ("Theorem 2", "LLP v >= v*"): "LLP",
+    ("Remark 2", "ALP optimum depends on c"): "OPT",
+}
+
+
+def check_arithmetic(arithmetic: Any) -> str:
+    """``arithmetic`` checked: one of :data:`ARITHMETICS`.
+
+    Raises
+    ------
+    ValidationError
+        For any other value (the message lists the known ones).
+    """
+    if arithmetic not in ARITHMETICS:
+        raise ValidationError(
+            f"arithmetic: unknown arithmetic {arithmetic!r}; known: {', '.join(ARITHMETICS)}"
+        )
+    return str(arithmetic)
 
 
 def due_solvers(check: str, solvers: Sequence[str]) -> list[str]:
@@ -313,6 +386,11 @@ class Tally:
     :class:`~lpbounds.status.Status`; ``"none"`` when no point came back), ``solver_status``
     the solver's own answer as cvxpy reports it (``"optimal"``, ``"optimal_inaccurate"``,
     ...; ``"error"`` when the solve raised): the distinct values in order, comma-joined.
+
+    With a ``judge`` (rational arithmetic: an
+    :class:`~lpbounds.studies.exact_claims.ExactJudge`) every returned point is also judged
+    against its LP's exact optimum, and the record gets ``inside_bracket`` and
+    ``exact_error`` (:data:`EXACT_COLUMNS`).
     """
 
     solves: int = 0
@@ -320,9 +398,11 @@ class Tally:
     compile_seconds: float = 0.0
     lp: list[str] = field(default_factory=list)
     own: list[str] = field(default_factory=list)
+    judge: Callable[[Any, LPResult], SolverJudgement] | None = field(default=None, repr=False)
+    judged: list[SolverJudgement] = field(default_factory=list, repr=False)
 
-    def add(self, res: LPResult | None) -> None:
-        """Count one solve (``res`` None: the solve returned no point)."""
+    def add(self, res: LPResult | None, form: Any = None) -> None:
+        """Count one solve of ``form`` (``res`` None: the solve returned no point)."""
         self.solves += 1
         if res is None:
             self.lp.append("none")
@@ -333,16 +413,35 @@ class Tally:
         self.lp.append(str(res.status))
         own = res.extra.get("solver_status") or res.extra.get("message")
         self.own.append(str(own or "unknown"))
+        if self.judge is not None and form is not None:
+            self.judged.append(self.judge(form, res))
 
     def fields(self) -> Record:
-        """The record keys this tally fills."""
-        return {
+        """The record keys this tally fills (with a judge, also the exact ones)."""
+        out: Record = {
             "solves": self.solves,
             "solve_seconds": self.solve_seconds,
             "compile_seconds": self.compile_seconds,
             "lp_status": ",".join(dict.fromkeys(self.lp)),
             "solver_status": ",".join(dict.fromkeys(self.own)),
         }
+        if self.judge is not None:
+            out.update(judged_fields(self.judged))
+        return out
+
+
+def judged_fields(judged: Sequence[SolverJudgement]) -> Record:
+    """``inside_bracket`` (every judged solve's certified bracket held; None when none had
+    one) and ``exact_error`` (the largest exact error, ``"p/q"``; None without a point),
+    with ``exact_error_float``."""
+    held = [j.inside_bracket for j in judged if j.inside_bracket is not None]
+    errors = [j.error for j in judged if j.error is not None]
+    worst = max(errors) if errors else None
+    return {
+        "inside_bracket": all(held) if held else None,
+        "exact_error": None if worst is None else fraction_text(worst),
+        "exact_error_float": None if worst is None else float(worst),
+    }
 
 
 def make_record(
@@ -350,17 +449,36 @@ def make_record(
     claim: str,
     instance: str,
     solver: str,
-    cmp: Comparison,
+    cmp: Comparison | None,
     detail: str = "",
     tally: Tally | None = None,
+    *,
+    error: str | None = None,
 ) -> Record:
-    """A JSON-able record of one verdict (``tally``: the solves it rests on, none if None)."""
-    return {
+    """A JSON-able record of one verdict: the one record builder of verify, its claims and
+    campaigns.
+
+    Parameters
+    ----------
+    check, claim, instance, solver : str
+    cmp : Comparison or None
+        The verdict and its intervals; None: no verdict (every number NaN).
+    detail : str
+    tally : Tally, optional
+        The solves the record rests on (none if None).
+    error : str, optional
+        The record of a claim that gave no verdict: outcome :data:`ERROR` and ``error``
+        saying why.
+    """
+    nan = float("nan")
+    if cmp is None:
+        cmp = Comparison(Verdict.INCONCLUSIVE, nan, nan, nan, 0, (nan, nan), (nan, nan))
+    record: Record = {
         "check": check,
         "claim": claim,
         "instance": instance,
         "solver": solver,
-        "verdict": cmp.verdict,
+        "verdict": cmp.verdict if error is None else ERROR,
         "width": cmp.width,
         "deviation": cmp.deviation,
         "accuracy": cmp.accuracy,
@@ -370,6 +488,9 @@ def make_record(
         "detail": detail,
         **(tally or Tally()).fields(),
     }
+    if error is not None:
+        record["error"] = error
+    return record
 
 
 def error_record(
@@ -377,11 +498,9 @@ def error_record(
     tally: Tally | None = None,
 ) -> Record:  # fmt: skip
     """The record of a claim that gave no verdict: outcome :data:`ERROR`, no interval,
-    ``error`` saying why (``tally``: the solves made before it failed)."""
-    nan = float("nan")
-    cmp = Comparison(Verdict.INCONCLUSIVE, nan, nan, nan, 0, (nan, nan), (nan, nan))
-    record = make_record(check, claim, instance, solver, cmp, detail, tally)
-    return {**record, "verdict": ERROR, "error": error}
+    ``error`` saying why (``tally``: the solves made before it failed); :func:`make_record`
+    with ``error``."""
+    return make_record(check, claim, instance, solver, None, detail, tally, error=error)
 
 
 def _no_point(accuracy: float) -> Comparison:
@@ -439,10 +558,15 @@ class _Refs:
     costs: list[np.ndarray]
     d_list: list[np.ndarray]
     method: str = "mpi"
+    judge: Callable[[Any, LPResult], SolverJudgement] | None = None
 
     def exact(self, model: Any) -> tuple[np.ndarray, np.ndarray]:
         """The certified interval of a model's or row system's fixed point."""
         return exact_interval(model, self.method)
+
+    def tally(self) -> Tally:
+        """A tally of solves (judging each against its exact optimum in rational mode)."""
+        return Tally(judge=self.judge)
 
 
 #: The methods of :func:`~lpbounds.dp.solve_exact` a check may use for its exact side.
@@ -492,20 +616,64 @@ def exact_interval(model: Any, method: str = "mpi") -> tuple[np.ndarray, np.ndar
         return dp_interval(solve_exact(model, "mpi"))
 
 
+def _draws(inst: VerifyInstance, n_costs: int, seed: int) -> tuple[list, list]:
+    """The instance's costs ``c`` and LLP's surplus costs ``d`` (one dense, one with about
+    half zeros), drawn from ``default_rng([seed, n_states, n_blocks])``."""
+    mdp, part = inst.mdp, inst.partition
+    rng = np.random.default_rng([seed, mdp.n_states, part.n_partitions])
+    costs = _random_costs(mdp.n_states, n_costs, rng)
+    d_list = [rng.uniform(0.0, 1.0, (mdp.n_states, mdp.n_actions)) for _ in range(2)]
+    d_list[1][rng.random(d_list[1].shape) < 0.5] = 0.0
+    return costs, d_list
+
+
 def _references(
     inst: VerifyInstance, n_costs: int, seed: int, rtol: float, method: str = "mpi"
 ) -> _Refs:
     mdp, part = inst.mdp, inst.partition
-    rng = np.random.default_rng([seed, mdp.n_states, part.n_partitions])
     vfull_lo, vfull_hi = exact_interval(mdp, method)
     rlp_rows = BellmanRows.aggregate(mdp, part, reduce="max")
     v_lo, v_hi = exact_interval(rlp_rows, method)
-    costs = _random_costs(mdp.n_states, n_costs, rng)
-    # LLP's surplus costs: one dense, one with about half zeros
-    d_list = [rng.uniform(0.0, 1.0, (mdp.n_states, mdp.n_actions)) for _ in range(2)]
-    d_list[1][rng.random(d_list[1].shape) < 0.5] = 0.0
+    costs, d_list = _draws(inst, n_costs, seed)
     scale = dp_scale(mdp.reward_absmax, mdp.discount)
     return _Refs(vfull_lo, vfull_hi, v_lo, v_hi, rlp_rows, rtol * scale, costs, d_list, method)
+
+
+def exact_instance(
+    inst: VerifyInstance,
+    n_costs: int = 3,
+    seed: int = 0,
+    *,
+    size_limit: int | None = None,
+    progress: Progress | None = None,
+) -> ExactInstance:
+    """The instance in exact arithmetic, with the costs and surplus costs
+    :func:`verify_instance` draws for it (the same ``n_costs`` and ``seed``): what its
+    rational mode decides the claims on (share one between :func:`verify_instance` and
+    conjectures with ``exact=``).
+
+    Parameters
+    ----------
+    inst : VerifyInstance
+    n_costs, seed : int
+        As for :func:`verify_instance`.
+    size_limit : int, optional
+        The most variables one exact solve takes (default
+        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`).
+    progress : callable(str), optional
+        Called as each exact piece starts.
+
+    Returns
+    -------
+    lpbounds.studies.exact_claims.ExactInstance
+    """
+    from .exact_claims import ExactInstance
+
+    costs, d_list = _draws(inst, n_costs, seed)
+    return ExactInstance(
+        inst.name, inst.mdp, inst.partition, costs=costs, d_list=d_list, ib_blocks=IB_BLOCKS,
+        size_limit=size_limit, progress=progress,
+    )  # fmt: skip
 
 
 def _optimum_claims(
@@ -597,14 +765,15 @@ def _cost_claims(
     ref_lo: np.ndarray,
     ref_hi: np.ndarray,
     acc: float,
+    tally: Tally,
 ) -> tuple[list[Record], list[Comparison], LPResult | None, Tally]:
     """Objective and per-entry verdicts over the costs, the domination comparisons of the
-    certified feasible points, the first cost's result (for Lemma 2) and the solves' tally."""
+    certified feasible points, the first cost's result (for Lemma 2) and the solves'
+    ``tally`` (filled)."""
     objs, entries, doms, fail, first = [], [], [], "", None
-    tally = Tally()
     for k, (form, cost) in enumerate(forms):
         res, msg = try_solve(form, solver)
-        tally.add(res)
+        tally.add(res, form)
         if res is None:
             objs.append(_no_point(acc))
             entries.append(_no_point(acc))
@@ -661,8 +830,8 @@ def _lemma2_checks(
     pred_lo = np.nextafter(refs.v_lo - beta, -np.inf)
     note = f"predicted [v* - {beta:.2e}, v*] from the duals' certified slack"
     res, msg = try_solve(slp, solver)
-    tally = Tally()
-    tally.add(res)
+    tally = refs.tally()
+    tally.add(res, slp)
     if res is None:
         cmp, detail = _no_point(acc), msg
     else:
@@ -744,11 +913,11 @@ def lemma2_slack(rlp: Any, result: LPResult, v_lo: np.ndarray, v_hi: np.ndarray)
 def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Record]:
     """IB: every block = v* (and its certified feasible point >= v*); LLP: v >= v*."""
     name, acc, mdp, part = inst.name, refs.accuracy, inst.mdp, inst.partition
-    eq, dom, fail, tally = [], [], "", Tally()
+    eq, dom, fail, tally = [], [], "", refs.tally()
     for L in IB_BLOCKS:
         ib = IB(mdp, part, L)
         res, msg = try_solve(ib, solver)
-        tally.add(res)
+        tally.add(res, ib)
         if res is None:
             eq.append(_no_point(acc))
             dom.append(_no_point(acc))
@@ -771,11 +940,11 @@ def _theorem2_checks(inst: VerifyInstance, refs: _Refs, solver: str) -> list[Rec
             tally,
         ),
     ]
-    llp, fail, tally = [], "", Tally()
+    llp, fail, tally = [], "", refs.tally()
     for d in refs.d_list:
         form = LLP(mdp, part, d)
         res, msg = try_solve(form, solver)
-        tally.add(res)
+        tally.add(res, form)
         if res is None:
             llp.append(_no_point(acc))
             fail = msg
@@ -850,7 +1019,9 @@ def _solver_checks(
     records: list[Record] = []
     if "Lemma 1" in checks:
         elps = [(ELP(mdp, c), c) for c in refs.costs]
-        records += _cost_claims("Lemma 1", name, solver, elps, refs.vfull_lo, refs.vfull_hi, acc)[0]
+        records += _cost_claims(
+            "Lemma 1", name, solver, elps, refs.vfull_lo, refs.vfull_hi, acc, refs.tally()
+        )[0]
     first_rlp = None
     if "Theorem 1" in checks or "Lemma 2" in checks:
         m = part.n_partitions
@@ -859,7 +1030,7 @@ def _solver_checks(
             for c in refs.costs
         ]
         recs, doms, first, tally = _cost_claims(
-            "Theorem 1", name, solver, rlps, refs.v_lo, refs.v_hi, acc
+            "Theorem 1", name, solver, rlps, refs.v_lo, refs.v_hi, acc, refs.tally()
         )
         if "Theorem 1" in checks:
             records += recs
@@ -895,6 +1066,10 @@ def verify_instance(
     progress: Progress | None = None,
     checks: Iterable[str] | None = None,
     exact_method: str = "mpi",
+    arithmetic: str = "float",
+    exact_size_limit: int | None = None,
+    certificates: str | Path | None = None,
+    exact: ExactInstance | None = None,
 ) -> list[Record]:
     """Lemma 1, Theorem 1, Lemma 2 and Theorem 2 on one instance, for each solver.
 
@@ -919,11 +1094,30 @@ def verify_instance(
         (:data:`EXACT_METHODS`; the certified intervals are valid whichever it is): MPI
         by default; policy iteration (``"pi"``) is far faster on small models at discounts
         near 1 (a 6-state model at 0.9994: 0.03 s against 6 s), so campaigns use it.
+    arithmetic : {"float", "rational"}
+        ``"rational"``: every check is also decided exactly, before any LP is solved, and
+        every solve judged against its exact optimum (see the module docstring).
+    exact_size_limit : int, optional
+        ``"rational"``: the most variables one exact solve takes (default
+        :data:`~lpbounds.tolerances.EXACT_MAX_VARIABLES`); a larger instance is refused
+        before any exact or LP work (:class:`~lpbounds.errors.SizeLimitError`).
+    certificates : str or Path, optional
+        ``"rational"``: a folder to write one certificate per check into
+        (:func:`~lpbounds.studies.exact_claims.write_certificates`); each record names
+        its file (``certificate``).
+    exact : ExactInstance, optional
+        ``"rational"``: the instance's exact side (:func:`exact_instance` with the same
+        ``n_costs`` and ``seed``), to share its exact solves with conjectures.
 
     Returns
     -------
     list of dict
         One record per claim and solver (see the module docstring).
+
+    Raises
+    ------
+    SizeLimitError
+        ``"rational"``: above ``exact_size_limit``.
     """
     if n_costs < 1:
         raise ValidationError(f"n_costs must be >= 1; got {n_costs}")
@@ -931,8 +1125,18 @@ def verify_instance(
         raise ValidationError(f"rtol must be a positive finite number; got {rtol!r}")
     chosen = _check_names(checks)
     check_exact_method(exact_method)
+    check_arithmetic(arithmetic)
     names = [resolve_solver(s) for s in solvers]
     refs = _references(inst, n_costs, seed, rtol, exact_method)
+    decided = None
+    if arithmetic == "rational":  # decided first: a size above the limit is refused at once
+        if exact is None:
+            exact = exact_instance(
+                inst, n_costs, seed, size_limit=exact_size_limit, progress=progress
+            )
+        _check_same_draws(exact, refs)
+        decided = decide_checks(exact, chosen, certificates)
+        refs.judge = exact.judge
     records = _exact_checks(inst, refs, chosen)
     firsts: dict[str, tuple[Any, LPResult]] = {}
     for solver in names:
@@ -942,9 +1146,80 @@ def verify_instance(
         records += recs
         if first is not None:
             firsts[solver] = first
-    if "Theorem 1" not in chosen:
-        return records
-    return records + _across_solvers(inst.name, firsts, refs.accuracy)
+    if "Theorem 1" in chosen:
+        records += _across_solvers(inst.name, firsts, refs.accuracy)
+    return records if decided is None else [rational_record(r, decided) for r in records]
+
+
+# ---------------------------------------------------------------------- rational arithmetic
+#: A check decided exactly and the name of its certificate file ("" when none was written).
+Decided = dict[str, "tuple[ExactVerdict, str]"]
+
+
+def _check_same_draws(exact: ExactInstance, refs: _Refs) -> None:
+    same = len(exact.costs) == len(refs.costs) and all(
+        np.array_equal(a, b) for a, b in zip(exact.costs, refs.costs, strict=False)
+    )
+    if not same or len(exact.d_list) != len(refs.d_list):
+        raise ValidationError(
+            "exact: its costs are not the ones drawn for this instance; build it with "
+            "exact_instance(inst, n_costs, seed) of the same n_costs and seed"
+        )
+
+
+def decide_checks(
+    exact: ExactInstance, checks: Iterable[str], certificates: str | Path | None = None
+) -> Decided:
+    """The checks decided exactly on ``exact`` (each with its certificate's file name when
+    written into the folder ``certificates``), by check."""
+    verdicts = exact.decide(checks)
+    names = [""] * len(verdicts)
+    if certificates is not None:
+        from .exact_claims import write_certificates
+
+        names = [p.name for p in write_certificates(verdicts, certificates)]
+    return {v.check: (v, name) for v, name in zip(verdicts, names, strict=True)}
+
+
+def _rests_on(verdict: ExactVerdict, prefix: str | None) -> tuple[bool, Fraction]:
+    """Whether the exact comparisons whose names start with ``prefix`` (all when None or
+    none match) hold, and their difference (the largest of equalities, the smallest of
+    inequalities)."""
+    comps = verdict.certificate["claim"]["comparisons"]
+    chosen = [c for c in comps if prefix is None or c["claim"].startswith(prefix)] or comps
+    diffs = [verdict.differences[c["claim"]] for c in chosen]
+    worst = max(diffs) if chosen[0]["relation"] == "==" else min(diffs)
+    return all(c["verdict"] == "holds" for c in chosen), worst
+
+
+def rational_record(record: Record, decided: Decided) -> Record:
+    """A floating-point record in rational arithmetic: ``verdict`` the exact verdict of the
+    comparisons its claim rests on (:data:`EXACT_OF_CLAIM`), ``float_verdict`` the one it
+    had, and the other :data:`EXACT_COLUMNS` (an *error* record stays one).
+
+    Parameters
+    ----------
+    record : dict
+        A record of :func:`verify_instance` or :func:`verify_remark2` (``inside_bracket``
+        and ``exact_error`` from its judged tally, when it has one).
+    decided : dict
+        The record's check decided exactly, by check (:func:`decide_checks`).
+    """
+    out = {k: v for k, v in record.items() if k not in EXACT_COLUMNS}
+    extra: Record = {k: record.get(k) for k in EXACT_COLUMNS}
+    extra["float_verdict"] = outcome_of(record)
+    found = decided.get(record["check"])
+    if found is not None and outcome_of(record) != ERROR:
+        verdict, name = found
+        holds, diff = _rests_on(verdict, EXACT_OF_CLAIM.get((record["check"], record["claim"])))
+        out["verdict"] = Verdict.HOLDS if holds else Verdict.VIOLATED
+        extra.update(
+            exact_difference=fraction_text(diff),
+            exact_difference_float=float(diff),
+            exact_seconds=verdict.seconds,
+            certificate=name,
+        )
+    return {**out, **extra}
 
 
 # ---------------------------------------------------------------------- Remark 2
@@ -1037,7 +1312,13 @@ def alp_value_bracket(
 
 
 def verify_remark2(
-    solvers: Sequence[str], *, seed: int = 0, rtol: float = LP_COMPARE_RTOL
+    solvers: Sequence[str],
+    *,
+    seed: int = 0,
+    rtol: float = LP_COMPARE_RTOL,
+    arithmetic: str = "float",
+    exact_size_limit: int | None = None,
+    certificates: str | Path | None = None,
 ) -> list[Record]:
     """Remark 2: a soft-aggregation ALP whose optimum depends on the cost, per solver.
 
@@ -1045,23 +1326,41 @@ def verify_remark2(
     OPT(c2)`` (no point is optimal for both costs), *inconclusive* otherwise; see the
     module docstring. ``deviation`` is the certified difference ``lo(OPT(c1 + c2)) -
     hi(OPT(c1)) - hi(OPT(c2))``, ``width`` the widest of the three brackets.
+
+    With ``arithmetic="rational"`` the three ALP optima are computed exactly
+    (:func:`~lpbounds.studies.exact_claims.decide_remark2`: exact simplex, exact duals),
+    the claim decided on them (*holds* or *violated*), each solve judged against its
+    exact optimum, and the certificate written into ``certificates`` when given (see
+    :func:`verify_instance`).
     """
+    check_arithmetic(arithmetic)
     names = [resolve_solver(s) for s in solvers]
     ex = find_cost_dependent_alp(seed, rtol=rtol)
     inst = f"soft-agg garnet seed {ex.seed} (n=6, K=2)"
     costs = [ex.cost1, ex.cost2, ex.cost1 + ex.cost2]
+    judge, decided = None, None
+    if arithmetic == "rational":
+        from .exact_claims import ExactJudge, decide_remark2, write_certificates
+
+        verdict = decide_remark2(
+            ex.mdp, ex.basis, ex.cost1, ex.cost2, name=inst, size_limit=exact_size_limit
+        )
+        written = [] if certificates is None else write_certificates([verdict], certificates)
+        decided = {verdict.check: (verdict, written[0].name if written else "")}
+        judge = ExactJudge(exact_size_limit)
     out = []
     for solver in names:
-        brackets, fail, tally = [], "", Tally()
+        brackets, fail, tally = [], "", Tally(judge=judge)
         for c in costs:
-            res, msg = try_solve(ALP(ex.mdp, ex.basis, c), solver)
-            tally.add(res)
+            form = ALP(ex.mdp, ex.basis, c)
+            res, msg = try_solve(form, solver)
+            tally.add(res, form)
             fail = fail or msg
             brackets.append(
                 (None, None) if res is None else alp_value_bracket(ex.mdp, ex.basis, c, res)
             )
         out.append(_remark2_record(inst, solver, brackets, fail, tally))
-    return out
+    return out if decided is None else [rational_record(r, decided) for r in out]
 
 
 def _remark2_record(
@@ -1112,6 +1411,9 @@ def run_verification(
     max_states: int = 10_000,
     include_models: bool = True,
     progress: Progress | None = None,
+    arithmetic: str = "float",
+    exact_size_limit: int | None = None,
+    certificates: str | Path | None = None,
 ) -> VerifyResult:
     """Every check on the models and ``n_random`` random instances, for each solver.
 
@@ -1124,6 +1426,8 @@ def run_verification(
         Any installed LP solvers; default :func:`default_solvers`.
     include_models : bool
         False: random instances (and Remark 2) only.
+    arithmetic, exact_size_limit, certificates
+        As for :func:`verify_instance` (``"rational"``: every claim decided exactly).
 
     Returns
     -------
@@ -1131,7 +1435,13 @@ def run_verification(
         ``(records, skipped)``, a named tuple: ``skipped`` are the default models left out
         for their size; ``to_pandas()`` gives the records as a table.
     """
+    check_arithmetic(arithmetic)
     solver_names = [resolve_solver(s) for s in (solvers or default_solvers())]
+    exact: dict[str, Any] = {}
+    if arithmetic == "rational":
+        exact = dict(
+            arithmetic=arithmetic, exact_size_limit=exact_size_limit, certificates=certificates
+        )
     insts: list[VerifyInstance] = []
     skipped: list[str] = []
     if include_models:
@@ -1140,11 +1450,12 @@ def run_verification(
     records: list[Record] = []
     for inst in insts:
         records += verify_instance(
-            inst, solver_names, n_costs=n_costs, seed=seed, rtol=rtol, progress=progress
-        )
+            inst, solver_names, n_costs=n_costs, seed=seed, rtol=rtol, progress=progress,
+            **exact,
+        )  # fmt: skip
     if progress is not None:
         progress("Remark 2")
-    records += verify_remark2(solver_names, seed=seed, rtol=rtol)
+    records += verify_remark2(solver_names, seed=seed, rtol=rtol, **exact)
     return VerifyResult(records, skipped)
 
 
@@ -1205,27 +1516,57 @@ def records_frame(records: Sequence[Record]) -> pd.DataFrame:
     return pd.DataFrame.from_records(rows, columns=[*RECORD_COLUMNS, *extra])
 
 
-class VerifyResult(NamedTuple):
+class VerdictRecords:
+    """What a verification's and a campaign's results share, from their records (the
+    hook :meth:`record_list`): outcome counts, the summary table and the exit status."""
+
+    def record_list(self) -> list[Record]:
+        """The records (hook)."""
+        raise NotImplementedError
+
+    def incomplete(self) -> bool:
+        """Whether records due are missing (hook; a campaign's), which fails the run."""
+        return False
+
+    def verdicts(self) -> dict[str, int]:
+        """How many records have each outcome (:data:`OUTCOMES`: the three verdicts and
+        "error")."""
+        found = [outcome_of(r) for r in self.record_list()]
+        return {w: found.count(w) for w in OUTCOMES}
+
+    def summary(self) -> pd.DataFrame:
+        """One row per (check, solver): outcome counts and the worst record
+        (:func:`summarize`)."""
+        import pandas as pd
+
+        return pd.DataFrame.from_records(summarize(self.record_list()))
+
+    def exit_status(self, strict: bool = False) -> int:
+        """1 if a record is *violated* or an *error*, or its exact side shows a defect (a
+        certified bracket that missed, a floating-point *violated* that holds exactly), or
+        records due are missing; with ``strict`` also if one is *inconclusive*; else 0
+        (:func:`exit_status`)."""
+        return 1 if self.incomplete() else exit_status(self.record_list(), strict=strict)
+
+
+@dataclass
+class VerifyResult(VerdictRecords):
     """What :func:`run_verification` returns: the records and the models skipped for
-    their size (a named tuple, so ``records, skipped = run_verification(...)`` works)."""
+    their size (it unpacks as ``records, skipped = run_verification(...)``)."""
 
     records: list[Record]
     skipped: list[str]
 
+    def __iter__(self) -> Iterator[Any]:
+        return iter((self.records, self.skipped))
+
+    def record_list(self) -> list[Record]:
+        """The records."""
+        return self.records
+
     def to_pandas(self) -> pd.DataFrame:
         """The records as a table (:func:`records_frame`, columns :data:`RECORD_COLUMNS`)."""
         return records_frame(self.records)
-
-    def summary(self) -> pd.DataFrame:
-        """One row per (check, solver): verdict counts and the worst record
-        (:func:`summarize`)."""
-        import pandas as pd
-
-        return pd.DataFrame.from_records(summarize(self.records))
-
-    def exit_status(self, strict: bool = False) -> int:
-        """1 if a record is *violated* (with ``strict``, also *inconclusive*), else 0."""
-        return exit_status(self.records, strict=strict)
 
 
 _CHECK_ORDER = [*INSTANCE_CHECKS, "Remark 2"]
@@ -1250,7 +1591,10 @@ def summarize(records: Sequence[Record]) -> list[Record]:
     Each row has ``check``, ``solver``, ``records``, ``holds``, ``inconclusive``,
     ``violated``, ``error`` (records without a verdict), and ``verdict``, ``width``,
     ``accuracy`` of the worst record (worst outcome, an error worst of all, then the
-    largest ``width / accuracy``).
+    largest ``width / accuracy``). Records of rational arithmetic add
+    ``float_inconclusive`` (decided exactly where the floating-point intervals could
+    not), ``disagree`` (a floating-point verdict, decided, other than the exact one) and
+    ``missed`` (records with a certified bracket that missed its exact optimum).
     """
     groups: dict[tuple[str, str], list[Record]] = {}
     for r in records:
@@ -1267,16 +1611,41 @@ def summarize(records: Sequence[Record]) -> list[Record]:
         row: Record = {"check": check, "solver": solver, "records": len(recs)}
         for word in OUTCOMES:
             row[word] = sum(outcome_of(r) == word for r in recs)
+        if any("float_verdict" in r for r in recs):
+            row.update(_exact_counts(recs))
         row.update(verdict=worst["verdict"], width=worst["width"], accuracy=worst["accuracy"])
         out.append(row)
     return out
 
 
+def _disagrees(r: Record) -> bool:
+    """A decided floating-point verdict other than the record's exact one."""
+    was = r.get("float_verdict")
+    return was in ("holds", "violated") and was != outcome_of(r)
+
+
+def _missed(r: Record) -> bool:
+    """A certified bracket of the record's solves missed its exact optimum (``False``,
+    or ``"False"`` as read back from a campaign's CSV)."""
+    return str(r.get("inside_bracket")) == "False"
+
+
+def _exact_counts(recs: Sequence[Record]) -> Record:
+    return {
+        "float_inconclusive": sum(r.get("float_verdict") == "inconclusive" for r in recs),
+        "disagree": sum(_disagrees(r) for r in recs),
+        "missed": sum(_missed(r) for r in recs),
+    }
+
+
 def exit_status(records: Sequence[Record], *, strict: bool = False) -> int:
     """1 if a record is *violated* or an *error* (with ``strict``, also *inconclusive*),
-    else 0."""
+    or (rational arithmetic) one shows a defect of the floating-point side: a certified
+    bracket that missed its exact optimum, or a floating-point *violated* (a proof) where
+    the exact verdict holds; else 0."""
     bad = {"violated", ERROR, *(["inconclusive"] if strict else [])}
-    return 1 if any(outcome_of(r) in bad for r in records) else 0
+    defect = any(_missed(r) or r.get("float_verdict") == "violated" for r in records)
+    return 1 if defect or any(outcome_of(r) in bad for r in records) else 0
 
 
 def write_json(records: list[Record], path: str | Path) -> None:
