@@ -6,7 +6,7 @@ and lpbounds certifies the returned point (``lower_values``/``upper_values``, ne
 solver's status): the table shows the certified error over the value scale
 ``max|R| / (1 - lambda)`` (``result.relative_error``) and, for a result that is not
 ``optimal``, its status and the width of its certified bracket. Writes the ``lp-accuracy``
-section of docs/tolerances.md; ``tests/test_docs_numbers.py`` solves the same rows again
+section of docs/tolerances.md; ``tests/project/test_docs_numbers.py`` solves the same rows again
 and fails when the page and a fresh run disagree (the ``patrol-paper`` rows, about two
 minutes, only in the slow suite).
 

@@ -479,12 +479,12 @@ out = {"seconds": ts, "end": t_end, "input": tin}
 """,
 }
 
-# the ported peer test models (tests/interop), in process: lpbounds' MPI and IPI, the
+# the ported peer test models (tests/model/interop), in process: lpbounds' MPI and IPI, the
 # error of each against policy iteration's V* (exact evaluation by LU) and its certificate
 DP_PORTED = """
 import json, time, numpy as np, scipy.sparse as sp
 import lpbounds as lb
-def forest(S, r1=4.0, r2=2.0, p=0.1):  # pymdptoolbox's example (tests/interop)
+def forest(S, r1=4.0, r2=2.0, p=0.1):  # pymdptoolbox's example (tests/model/interop)
     P = np.zeros((2, S, S))
     P[0, np.arange(S - 1), np.arange(1, S)] = 1 - p
     P[0, S - 1, S - 1] = 1 - p
@@ -706,7 +706,7 @@ paper-shape garnet, >= 1x on the mid-size garnet):
         + "\n".join(targets_)
         + """
 
-lpbounds' MPI and IPI on the ported peer test models (tests/interop; in process, best of
+lpbounds' MPI and IPI on the ported peer test models (tests/model/interop; in process, best of
 5; error against policy iteration's V* to 1e-13, within each answer's certificate):
 
 | model | MPI | IPI |

@@ -238,7 +238,7 @@ lpbounds installed from its wheel: a first run against the second.
 `import lpbounds` loads its public names on first use (PEP 562), as the packages do (the
 formulations, the NLP, the patrol: `lpbounds._lazy`), so a command imports what its work
 needs: exact DP and the model listing load no cvxpy, scipy.stats, HiGHS, Clarabel,
-matplotlib, pandas, Gymnasium or Dask (`tests/test_startup.py` fails if they do). Every
+matplotlib, pandas, Gymnasium or Dask (`tests/cli/test_startup.py` fails if they do). Every
 kernel is C, built at install: nothing is compiled at run time, so a first solve costs
 what any solve does, and numba is no dependency (`pip show numba` in the fresh
 environments above).

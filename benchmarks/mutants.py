@@ -38,10 +38,10 @@ REPO = Path(__file__).resolve().parent.parent
 
 #: The tests that guard each kind of promise (the issue counted "formulations, row sums"
 #: and "patrol").
-CERTIFICATES = ("tests/formulations", "tests/test_row_sums.py", "tests/test_exact_brackets.py")
-DP = ("tests/test_dp.py", "tests/test_row_sums.py", "tests/test_exact_brackets.py")
+CERTIFICATES = ("tests/formulations", "tests/dp/test_row_sums.py", "tests/certification/test_exact_brackets.py")
+DP = ("tests/dp/test_dp.py", "tests/dp/test_row_sums.py", "tests/certification/test_exact_brackets.py")
 PATROL = ("tests/patrol",)
-VERIFY = ("tests/test_verify.py", "tests/test_verify_planted.py", "tests/patrol/test_beyond.py",
+VERIFY = ("tests/studies/test_verify.py", "tests/studies/test_verify_planted.py", "tests/patrol/test_beyond.py",
           "tests/patrol/test_beyond_planted.py")  # fmt: skip
 
 

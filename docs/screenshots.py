@@ -21,7 +21,7 @@ belongs), and each display formula wider than its box. That one must scroll
 all in the 1280-px views of whole pages, where a formula that scrolls shows a reader only
 its start (write it as rows: ``\\begin{array}{l} ... \\\\ ... \\end{array}``). The script
 exits 1 if a formula is not laid out, shows TeX, is clipped or does not fit.
-``tests/test_docs_html.py`` checks the same pages' HTML where no browser is installed.
+``tests/project/test_docs_html.py`` checks the same pages' HTML where no browser is installed.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ A notebook that needs an optional package names it in its header
 (``lpbounds: requires: [gymnasium]`` under ``jupyter:``); without it the notebook is not
 executed and its page says so (the code is shown, without outputs).
 
-``tests/test_notebooks.py`` executes every notebook with :func:`execute_all` too, so a
+``tests/project/test_notebooks.py`` executes every notebook with :func:`execute_all` too, so a
 notebook that fails fails the test suite as well as the build. An executed notebook is
 kept on disk (``$LPBOUNDS_NOTEBOOK_CACHE``, default ``~/.cache/lpbounds-docs/notebooks``;
 ``off`` keeps none) under a key of its text, the contents of the lpbounds sources and the

@@ -23,7 +23,7 @@ scope), this rewrites each docstring for the site only:
   turns the title into an HTML ``class`` too, where a cross-reference's markup would be
   pasted as escaped text.
 
-``tests/test_docs.py`` builds the site and fails on any raw role or directive left.
+``tests/project/test_docs.py`` builds the site and fails on any raw role or directive left.
 Configured in ``mkdocs.yml`` under the python handler's ``extensions``.
 """
 

@@ -92,7 +92,7 @@ def offset_folds(row_delta: float) -> bool:
 #: chain (period 2: x -> y -> x) the alternating error mode decays at ``lambda`` only (the
 #: Porteus shift removes the constant mode alone), so that rounding accumulates to about
 #: ``eps max|V| / (1 - lambda)`` and the residual stalls there. Measured (hypothesis cases
-#: of tests/test_row_sums.py, rewards ~1e-3, discount 0.999): MPI stalled at a residual
+#: of tests/dp/test_row_sums.py, rewards ~1e-3, discount 0.999): MPI stalled at a residual
 #: of ``0.48 eps max|R| / (1 - lambda)^2`` (9.7e-14 against a default of 9.1e-15), and
 #: policy evaluation at 8.021e-15 against 8.020e-15. 2 leaves a factor 4.
 DP_NOISE_ULPS: float = 2.0

@@ -11,7 +11,7 @@ import lpbounds as lb
 from lpbounds.errors import SolverError, SolverNotInstalledError, ValidationError
 from lpbounds.formulations import ALP, RLP, find_cost_dependent_alp
 
-from .. import _independent as ind
+from tests import _independent as ind
 from ._reference import transition_rows
 
 

@@ -21,7 +21,7 @@ from lpbounds.formulations import ALP, ELP, IB, RLP, installed_lp_solvers
 from lpbounds.formulations.alp import soft_aggregation_basis
 from lpbounds.status import Status
 
-from .. import _independent as ind
+from tests import _independent as ind
 
 SOLVERS = [s for s in ("HIGHS", "CLARABEL", "SCS") if s in installed_lp_solvers()]
 

@@ -23,8 +23,8 @@ from lpbounds.formulations.rows_lp import RowsLP
 from lpbounds.patrol import PatrolParams
 from lpbounds.patrol.bounds import LBLP, UBLP
 
-from .. import _independent as ind
-from ..conftest import reference_solve
+from tests import _independent as ind
+from tests.conftest import reference_solve
 from . import test_lp_battery as battery
 from ._reference import transition_rows
 

@@ -11,7 +11,7 @@ import lpbounds as lb
 from lpbounds.errors import ValidationError
 from lpbounds.formulations import IB, LLP
 
-from .. import _independent as ind
+from tests import _independent as ind
 from ._reference import rlp_reference
 
 

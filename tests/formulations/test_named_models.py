@@ -25,8 +25,8 @@ from lpbounds.patrol import PatrolParams
 from lpbounds.patrol.bounds import LBLP, UBLP
 from lpbounds.status import Status
 
-from .. import _independent as ind
-from ..conftest import reference_solve
+from tests import _independent as ind
+from tests.conftest import reference_solve
 from ._reference import _q_partition, rlp_reference
 
 

@@ -30,7 +30,7 @@ from lpbounds.model.generators import garnet, random_partition
 from lpbounds.model.partition import Partition
 from lpbounds.status import Status
 
-from .. import _independent as ind
+from tests import _independent as ind
 
 #: methods that must agree with the reference to this (relative to max(1, max|w*|))
 AGREE_RTOL = 1e-9

@@ -24,7 +24,7 @@ from lpbounds.model.generators import garnet, random_partition
 from lpbounds.model.partition import Partition
 from lpbounds.status import Status
 
-from .. import _independent as ind
+from tests import _independent as ind
 
 #: slack of the checks at w*, relative to the problem's scale max|R| / (1 - lambda)
 VALID_RTOL = 1e-9

@@ -22,7 +22,7 @@ from lpbounds.formulations import NLP
 from lpbounds.model.partition import Partition
 from lpbounds.status import Status
 
-from .. import _independent as ind
+from tests import _independent as ind
 
 METHODS = ("fixed-point", "strategy-iteration", "milp", "cutting-planes")
 #: keywords that keep every method short on the property test's small instances

@@ -11,8 +11,8 @@ import lpbounds as lb
 from lpbounds.errors import SolverError, ValidationError
 from lpbounds.formulations import ELP, RLP
 
-from .. import _independent as ind
-from ..conftest import reference_solve
+from tests import _independent as ind
+from tests.conftest import reference_solve
 from ._reference import rlp_reference
 
 

@@ -15,7 +15,7 @@ minima and maxima, any-of flags), so the split changes no number. ``bucket_order
 ``reward_codes`` are one serial pass (their results depend on the order of the whole pass).
 
 Every function has the name, arguments and outputs of its numpy twin in
-:mod:`lpbounds._kernels.twins` and the same arithmetic (``tests/test_ckernels.py`` compares
+:mod:`lpbounds._kernels.twins` and the same arithmetic (``tests/kernels/test_ckernels.py`` compares
 them bit for bit); they replaced numba kernels that computed the same numbers, and need no
 JIT compiler: a first call costs what any call does. Indices read from the
 arrays are checked in C: an index outside its array raises IndexError naming the argument

@@ -20,11 +20,11 @@ distribution's outcomes is unrolled).
 
 The arithmetic is that of the numpy twins (:mod:`lpbounds._kernels.twins`), so the
 numbers are bit-identical to theirs and to what the numba versions gave
-(``tests/test_fast_paths.py``).
+(``tests/dp/test_fast_paths.py``).
 
 The C functions check every index they read, so that no input reaches memory outside its
 array when :mod:`lpbounds._kernels.rowsweeps` is called directly (the row systems built by
-lpbounds are valid by construction; ``tests/test_native_bounds.py`` fuzzes the rest): an
+lpbounds are valid by construction; ``tests/kernels/test_native_bounds.py`` fuzzes the rest): an
 ``indptr`` outside ``[0, R]`` or decreasing raises ValueError, a target outside ``v`` or a
 row of ``rows`` / ``sel`` outside the rows IndexError, naming the entry. The owners are
 swept in blocks of 256; a target is checked as it is read (a branch never taken on valid

@@ -8,7 +8,7 @@ on a :class:`~lpbounds.model.mdp.FiniteMDP` first look for its post-decision for
 (:class:`~lpbounds.rows.PostDecisionRows`, verified on every pair, cached on the MDP by
 :func:`post_decision_rows`): where it exists (the patrol model) a sweep reads far less
 memory and the exact rows are never built. Its arithmetic is that of the rows, so the
-results are the same numbers; ``tests/test_fast_paths.py`` checks that. Pass the rows
+results are the same numbers; ``tests/dp/test_fast_paths.py`` checks that. Pass the rows
 (``exact_rows(mdp)``) to force the plain path.
 
 Every sweep runs C kernels built at install (:mod:`lpbounds._kernels.dispatch`), at every

@@ -14,7 +14,7 @@ speed. It is opt-in: measured against MPI with five evaluation sweeps per improv
 needs fewer still on the large models) it lost on every large model and won only on small
 slow-mixing ones:
 
-* the ported peer test models (tests/interop): pymdptoolbox's forest with 1,000 states
+* the ported peer test models (tests/model/interop): pymdptoolbox's forest with 1,000 states
   and discount 0.99, MPI 157 sweeps (44 ms), IPI 57 (26 ms); MDPSolver's test 1
   (discount 0.98): 31 against 11 sweeps, 0.56 against 0.44 ms;
 

@@ -101,7 +101,7 @@ class PorteusBounds:
     computed ``T V - V`` (:func:`lpbounds.stochastic.bellman_margin`), every factor is
     rounded away from the bound and the bounds are rounded outward by one ulp, so they
     hold for the exact ``V_pi`` and ``V*`` of the stored rows (tested against exact
-    rational arithmetic in ``tests/test_row_sums.py``).
+    rational arithmetic in ``tests/dp/test_row_sums.py``).
     """
 
     lower: np.ndarray

@@ -178,7 +178,7 @@ class Tracker:
 
 #: Callables run, in order, with each step's name (``build``, ``vstar``, ... ``write``,
 #: ``commit``) as the step starts; empty by default, so a run calls nothing. A caller that
-#: needs to act at a chosen point of a run appends a hook (tests/test_interrupt.py sends
+#: needs to act at a chosen point of a run appends a hook (tests/cli/test_interrupt.py sends
 #: the process SIGINT from one, as Ctrl-C would at that step) and removes it afterwards;
 #: an exception a hook raises ends the run as one raised by the step itself would.
 STEP_HOOKS: list[Callable[[str], None]] = []
