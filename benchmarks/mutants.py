@@ -38,11 +38,23 @@ REPO = Path(__file__).resolve().parent.parent
 
 #: The tests that guard each kind of promise (the issue counted "formulations, row sums"
 #: and "patrol").
-CERTIFICATES = ("tests/formulations", "tests/dp/test_row_sums.py", "tests/certification/test_exact_brackets.py")
-DP = ("tests/dp/test_dp.py", "tests/dp/test_row_sums.py", "tests/certification/test_exact_brackets.py")
+CERTIFICATES = (
+    "tests/formulations",
+    "tests/dp/test_row_sums.py",
+    "tests/certification/test_exact_brackets.py",
+)
+DP = (
+    "tests/dp/test_dp.py",
+    "tests/dp/test_row_sums.py",
+    "tests/certification/test_exact_brackets.py",
+)
 PATROL = ("tests/patrol",)
-VERIFY = ("tests/studies/test_verify.py", "tests/studies/test_verify_planted.py", "tests/patrol/test_beyond.py",
-          "tests/patrol/test_beyond_planted.py")  # fmt: skip
+VERIFY = (
+    "tests/studies/test_verify.py",
+    "tests/studies/test_verify_planted.py",
+    "tests/patrol/test_beyond.py",
+    "tests/patrol/test_beyond_planted.py",
+)
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,6 @@ import lpbounds as lb
 from lpbounds.formulations import ELP, NLP, RLP
 from lpbounds.rows import BellmanRows
 from lpbounds.tolerances import PROBABILITY_SUM_ATOL
-
 from tests import _exact as ex
 
 EPS = float(np.finfo(np.float64).eps)

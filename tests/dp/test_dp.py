@@ -20,7 +20,6 @@ import lpbounds as lb
 from lpbounds.dp import exact_rows
 from lpbounds.errors import ConvergenceError, ValidationError
 from lpbounds.tolerances import DP_NOISE_ULPS
-
 from tests import _independent as ind
 from tests.conftest import reference_bellman, reference_solve, two_state_closed_form, two_state_mdp
 

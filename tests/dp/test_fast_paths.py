@@ -32,7 +32,6 @@ from lpbounds._kernels import twins as _npkernels
 from lpbounds.dp import exact_rows, post_decision_rows
 from lpbounds.patrol import PatrolModel, PatrolParams
 from lpbounds.rows import PostDecisionRows
-
 from tests import _independent as ind
 from tests.conftest import reference_bellman, reference_solve
 

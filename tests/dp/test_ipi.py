@@ -18,7 +18,6 @@ import lpbounds as lb
 from lpbounds.dp import exact_rows
 from lpbounds.dp import krylov as _krylov
 from lpbounds.patrol import PatrolModel, PatrolParams
-
 from tests import _independent as ind
 
 

@@ -17,7 +17,6 @@ from hypothesis import strategies as st
 import lpbounds as lb
 from lpbounds.errors import ValidationError
 from lpbounds.stochastic import RowSums, row_sums
-
 from tests import _exact as ex
 
 EPS = float(np.finfo(np.float64).eps)

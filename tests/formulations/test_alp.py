@@ -10,8 +10,8 @@ from scipy.optimize import linprog
 import lpbounds as lb
 from lpbounds.errors import SolverError, SolverNotInstalledError, ValidationError
 from lpbounds.formulations import ALP, RLP, find_cost_dependent_alp
-
 from tests import _independent as ind
+
 from ._reference import transition_rows
 
 

@@ -20,7 +20,6 @@ import lpbounds as lb
 from lpbounds.formulations import ALP, ELP, IB, RLP, installed_lp_solvers
 from lpbounds.formulations.alp import soft_aggregation_basis
 from lpbounds.status import Status
-
 from tests import _independent as ind
 
 SOLVERS = [s for s in ("HIGHS", "CLARABEL", "SCS") if s in installed_lp_solvers()]

@@ -22,9 +22,9 @@ from lpbounds.formulations import ALP, ELP, IB, RLP, SLP, soft_aggregation_basis
 from lpbounds.formulations.rows_lp import RowsLP
 from lpbounds.patrol import PatrolParams
 from lpbounds.patrol.bounds import LBLP, UBLP
-
 from tests import _independent as ind
 from tests.conftest import reference_solve
+
 from . import test_lp_battery as battery
 from ._reference import transition_rows
 

@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 import lpbounds as lb
 from lpbounds.errors import ValidationError
 from lpbounds.formulations import IB, LLP
-
 from tests import _independent as ind
+
 from ._reference import rlp_reference
 
 

@@ -13,9 +13,9 @@ import pytest
 
 import lpbounds as lb
 from lpbounds.formulations import ALP, ELP, IB, LLP, RLP, SLP
-
 from tests import _independent as ind
 from tests.conftest import reference_solve
+
 from ._reference import rlp_reference, transition_rows
 
 SOLVERS = ["HIGHS", "CLARABEL", "SCIPY"]

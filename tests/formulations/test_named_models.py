@@ -24,9 +24,9 @@ from lpbounds.formulations.alp import soft_aggregation_basis
 from lpbounds.patrol import PatrolParams
 from lpbounds.patrol.bounds import LBLP, UBLP
 from lpbounds.status import Status
-
 from tests import _independent as ind
 from tests.conftest import reference_solve
+
 from ._reference import _q_partition, rlp_reference
 
 

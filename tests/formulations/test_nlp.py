@@ -29,7 +29,6 @@ from lpbounds.formulations.nlp.cuts import (
 from lpbounds.model.generators import garnet, random_partition
 from lpbounds.model.partition import Partition
 from lpbounds.status import Status
-
 from tests import _independent as ind
 
 #: methods that must agree with the reference to this (relative to max(1, max|w*|))

@@ -23,7 +23,6 @@ from lpbounds.formulations.nlp.monotone import MonotoneMaster, monotone_cuts
 from lpbounds.model.generators import garnet, random_partition
 from lpbounds.model.partition import Partition
 from lpbounds.status import Status
-
 from tests import _independent as ind
 
 #: slack of the checks at w*, relative to the problem's scale max|R| / (1 - lambda)

@@ -21,7 +21,6 @@ from lpbounds.errors import ValidationError
 from lpbounds.formulations import NLP
 from lpbounds.model.partition import Partition
 from lpbounds.status import Status
-
 from tests import _independent as ind
 
 METHODS = ("fixed-point", "strategy-iteration", "milp", "cutting-planes")

@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 import lpbounds as lb
 from lpbounds.errors import SolverError, ValidationError
 from lpbounds.formulations import ELP, RLP
-
 from tests import _independent as ind
 from tests.conftest import reference_solve
+
 from ._reference import rlp_reference
 
 

@@ -30,7 +30,6 @@ from lpbounds.cli.main import main
 from lpbounds.errors import SolverNotInstalledError, ValidationError
 from lpbounds.formulations import RLP
 from lpbounds.model import shelf
-
 from tests import _independent as ind
 
 SHELF_FILES = ["forest", "gridworld", "queue", "inventory", "savings"]

@@ -22,7 +22,6 @@ from lpbounds import plot
 from lpbounds.errors import ValidationError
 from lpbounds.formulations import RLP
 from lpbounds.formulations.nlp.problem import NLP
-
 from tests import _independent as ind
 from tests._figures import assert_legend_visible
 

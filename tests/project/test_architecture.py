@@ -340,8 +340,7 @@ def folder_table(text: str) -> dict[str, str]:
     """Folder -> layer name, from the table under '## Where the tests are'."""
     section = text.split("## Where the tests are", 1)[1].split("\n## ", 1)[0]
     return {
-        m[1]: m[2].strip()
-        for m in re.finditer(r"^\|\s*`tests/(\w+)`\s*\|([^|]+)\|", section, re.M)
+        m[1]: m[2].strip() for m in re.finditer(r"^\|\s*`tests/(\w+)`\s*\|([^|]+)\|", section, re.M)
     }
 
 

@@ -23,7 +23,6 @@ import pytest
 
 import lpbounds as lb
 from lpbounds.tolerances import DP_NOISE_ULPS
-
 from tests import _independent as ind
 
 ROOT = Path(__file__).resolve().parents[2]

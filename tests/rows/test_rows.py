@@ -9,7 +9,6 @@ from hypothesis import strategies as st
 
 import lpbounds as lb
 from lpbounds.errors import ValidationError
-
 from tests.conftest import reference_bellman
 
 

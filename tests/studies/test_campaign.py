@@ -24,7 +24,6 @@ from lpbounds.model.partition import Partition
 from lpbounds.status import Verdict
 from lpbounds.studies import campaign as cp
 from lpbounds.studies import claims as cl
-
 from tests import _independent as ind
 
 GARNETS = ["garnet", "masked-garnet"]

@@ -19,7 +19,6 @@ from lpbounds.cli.main import main
 from lpbounds.formulations.highs import quiet_highs
 from lpbounds.studies.compare import FORMULATIONS, load_case
 from lpbounds.studies.export import EXPORT_FILES, exact_optimum, load_export, read_solution
-
 from tests.conftest import reference_solve
 
 GARNET = "garnet:40:6:3"

@@ -19,7 +19,6 @@ from lpbounds.studies.profiles import (
     shifted_geometric_mean,
 )
 from lpbounds.studies.report import profile_tables, solver_summary
-
 from tests._figures import assert_legend_visible
 
 INF = math.inf

@@ -11,7 +11,6 @@ from lpbounds.model.instances import load_instance
 from lpbounds.model.mdp import FiniteMDP
 from lpbounds.model.partition import Partition
 from lpbounds.studies import shrink as sh
-
 from tests import _independent as ind
 
 

@@ -457,7 +457,6 @@ def test_study_png_shows_every_problem_and_no_vertical_line(tmp_path, monkeypatc
     never runs vertically through them; every legend entry shows."""
     from lpbounds.studies import report
     from lpbounds.studies.profiles import new_figure
-
     from tests._figures import assert_legend_visible
 
     made = []

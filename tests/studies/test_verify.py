@@ -20,7 +20,6 @@ from lpbounds.errors import SolverNotInstalledError, ValidationError
 from lpbounds.formulations import RLP, SLP
 from lpbounds.rows import BellmanRows
 from lpbounds.status import Verdict
-
 from tests import _independent as ind
 
 KEYS = {

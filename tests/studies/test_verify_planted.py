@@ -28,7 +28,6 @@ from lpbounds.certification.checks import combine, compare_at_least, compare_equ
 from lpbounds.formulations import ELP, IB, LLP, RLP, SLP
 from lpbounds.status import Verdict
 from lpbounds.studies.claims import BuiltinClaim, Conjecture, run_claims
-
 from tests import _independent as ind
 
 DELTA = 0.05

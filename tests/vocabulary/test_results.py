@@ -22,7 +22,6 @@ from lpbounds.formulations.nlp.results import NLPResult
 from lpbounds.formulations.results import LPResult
 from lpbounds.results import Result, outward_bracket
 from lpbounds.status import Status
-
 from tests import _independent as ind
 
 EPS = float(np.finfo(np.float64).eps)

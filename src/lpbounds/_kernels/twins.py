@@ -9,9 +9,9 @@ arithmetic: a row's value is ``acc = 0.0; acc += probs[r, l] * v[targets[r, l]]`
 multiply-add), then ``reward[r] + discount * acc``; a max (min) keeps the *first* row or
 action that attains it and never picks a NaN; the residual extremes ignore NaNs. So the
 two return the same numbers (up to the sign of a zero residual extreme), which
-``tests/kernels/test_ckernels.py``, ``tests/kernels/test_native.py`` and ``tests/dp/test_fast_paths.py``
-check bit for bit on random models with action masks (kernel by kernel, and whole solves
-with the library running on the twins); the rounding analysis of
+``tests/kernels/test_ckernels.py``, ``tests/kernels/test_native.py`` and
+``tests/dp/test_fast_paths.py`` check bit for bit on random models with action masks
+(kernel by kernel, and whole solves with the library running on the twins); the rounding analysis of
 :mod:`lpbounds.certification.certificate` and :func:`lpbounds.tolerances.error_bound`
 covers both.
 
