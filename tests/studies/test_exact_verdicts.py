@@ -196,7 +196,9 @@ def test_a_solvers_exact_error_and_bracket_against_an_independent_optimum():
         j = judge(form, res)
         assert j.exact.objective == opt
         assert j.objective_error == abs(Fraction(float(res.objective)) - opt)
-        assert j.error == max(abs(Fraction(float(v)) - t) for v, t in zip(res.values, x))
+        assert j.error == max(
+            abs(Fraction(float(v)) - t) for v, t in zip(res.values, x, strict=True)
+        )
         inside = all(
             Fraction(float(lo)) <= t <= Fraction(float(hi))
             for lo, hi, t in zip(res.lower_values, res.upper_values, x, strict=True)
@@ -219,7 +221,9 @@ def test_a_records_exact_error_is_the_largest_of_its_solves():
             res = RLP(mdp, part, c).solve(solver, raise_on_failure=False)
             objective.append(abs(Fraction(float(res.objective)) - opt))
             if np.all(np.bincount(part.labels, weights=c) > 0):  # a unique optimal point
-                point.append(max(abs(Fraction(float(v)) - t) for v, t in zip(res.values, x)))
+                point.append(
+                    max(abs(Fraction(float(v)) - t) for v, t in zip(res.values, x, strict=True))
+                )
         (r,) = [
             r for r in records if r["solver"] == solver and r["claim"] == "optimum = exact (c > 0)"
         ]
