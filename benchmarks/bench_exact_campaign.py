@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import resource
 import shutil
 import subprocess
@@ -126,11 +127,12 @@ def count(out: Path) -> dict:
 def section(run: dict, checked: dict, c: dict, n: int, seed: int) -> str:
     lb, la = run["load_before"], run["load_after"]
     m, s = divmod(run["seconds"], 60)
+    command = re.sub(r"--out \S+", "--out OUT", run["command"]).replace(" -q", "")
     return f"""## Exact verdicts: a {n}-instance campaign
 
 `benchmarks/bench_exact_campaign.py`, {today()}; {machine()}.
 
-    {run["command"].replace(" -q", "")}
+    {command}
     python -I -S src/lpbounds/exact/check.py OUT/certificates/*
 
 Load average {lb[0]:.1f} before, {la[0]:.1f} after (the machine is shared; the campaign ran
