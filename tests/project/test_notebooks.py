@@ -69,7 +69,7 @@ def test_the_teaching_notebooks_are_there():
     names = {p.stem for p in NOTEBOOKS}
     expected = {
         "theorem1_cost_independence", "theorem2_no_lifting", "lemma2_surrogate",
-        "nlp_bracket", "patrol_bounds", "gymnasium_frozenlake",
+        "nlp_bracket", "patrol_bounds", "gymnasium_frozenlake", "exact_theorem1",
     }  # fmt: skip
     assert expected <= names, expected - names
 

@@ -601,7 +601,10 @@ def _exact_note(r: dict) -> str:
         parts.append(f"float verdict {r['float_verdict']}")
     if r.get("exact_error") is not None:
         held = {True: "inside", False: "OUTSIDE"}.get(r["inside_bracket"], "no")
-        parts.append(f"solver off by {fmt_sci(r['exact_error_float'])}, {held} its bracket")
+        off = f"solver's objective off by {fmt_sci(r['exact_error_float'])}"
+        if r.get("exact_value_error") is not None:
+            off += f", its point by {fmt_sci(r['exact_value_error_float'])}"
+        parts.append(f"{off}, {held} its bracket")
     return "; ".join(parts) + "; "
 
 

@@ -236,6 +236,7 @@ _STRING_COLUMNS = (
     "exact_difference",
     "inside_bracket",
     "exact_error",
+    "exact_value_error",
     "certificate",
 )
 

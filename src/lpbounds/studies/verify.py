@@ -86,10 +86,16 @@ Rational arithmetic (``arithmetic="rational"``)
     when violated) and its nearest double ``exact_difference_float``, ``exact_seconds``
     (the exact work of the claim), ``certificate`` (the file proving it, when written),
     and per solver ``inside_bracket`` (whether every certified bracket of the record's
-    solves contained its LP's exact optimum) and ``exact_error`` (``"p/q"``: the largest
-    ``max |values - exact values|`` of those solves) with ``exact_error_float``. Records
-    without an LP solve have these two empty. The floating-point records and columns are
-    unchanged.
+    solves contained its LP's exact optimum), ``exact_error`` (``"p/q"``: the largest
+    ``|objective - exact optimum|`` of those solves, defined for every LP: its optimal
+    value is unique) with ``exact_error_float``, and ``exact_value_error`` (``"p/q"``:
+    the largest ``max |values - exact values|`` of those solves whose exact dual proves
+    the optimal point unique; empty when none does, as with a cost with zeros, where any
+    point of the optimal face is as right as another) with ``exact_value_error_float``.
+    Records without an LP solve have these empty. The records of the solver ``"exact"``
+    (exact DP, no LP) have ``width`` 0: their sides are exact values, points; their
+    ``lp_lo`` ... ``exact_hi`` stay the floating-point intervals the float verdict was
+    made on. The floating-point records and columns are unchanged.
 """
 
 from __future__ import annotations
@@ -141,6 +147,7 @@ __all__ = [
     "EXACT_COLUMNS",
     "EXACT_METHODS",
     "EXACT_OF_CLAIM",
+    "EXACT_SOLVER",
     "INSTANCE_CHECKS",
     "OUTCOMES",
     "RECORD_COLUMNS",
@@ -212,6 +219,9 @@ ERROR = "error"
 #: Every outcome a record can have, from best to worst: the verdicts, then :data:`ERROR`.
 OUTCOMES: tuple[str, ...] = ("holds", "inconclusive", "violated", ERROR)
 
+#: The solver of the solver-free records (exact DP, no LP).
+EXACT_SOLVER = "exact"
+
 #: The checks whose records include one of solver "exact" (solver-free) on every instance.
 _EXACT_CHECKS = ("Lemma 1", "Theorem 1", "Theorem 2")
 
@@ -230,6 +240,8 @@ EXACT_COLUMNS: tuple[str, ...] = (
     "inside_bracket",
     "exact_error",
     "exact_error_float",
+    "exact_value_error",
+    "exact_value_error_float",
     "certificate",
 )
 
@@ -432,16 +444,19 @@ class Tally:
 
 def judged_fields(judged: Sequence[SolverJudgement]) -> Record:
     """``inside_bracket`` (every judged solve's certified bracket held; None when none had
-    one) and ``exact_error`` (the largest exact error, ``"p/q"``; None without a point),
-    with ``exact_error_float``."""
+    one), ``exact_error`` (the largest ``|objective - exact optimum|``, ``"p/q"``; None
+    without a point) and ``exact_value_error`` (the largest ``max |values - exact
+    values|`` of the solves whose optimal point the exact dual proves unique; None when
+    none does), each with its nearest double (``..._float``)."""
     held = [j.inside_bracket for j in judged if j.inside_bracket is not None]
-    errors = [j.error for j in judged if j.error is not None]
-    worst = max(errors) if errors else None
-    return {
-        "inside_bracket": all(held) if held else None,
-        "exact_error": None if worst is None else fraction_text(worst),
-        "exact_error_float": None if worst is None else float(worst),
-    }
+    objective = [j.objective_error for j in judged if j.objective_error is not None]
+    values = [j.error for j in judged if j.error is not None and j.exact.unique]
+    out: Record = {"inside_bracket": all(held) if held else None}
+    for key, errors in (("exact_error", objective), ("exact_value_error", values)):
+        worst = max(errors) if errors else None
+        out[key] = None if worst is None else fraction_text(worst)
+        out[f"{key}_float"] = None if worst is None else float(worst)
+    return out
 
 
 def make_record(
@@ -1213,6 +1228,8 @@ def rational_record(record: Record, decided: Decided) -> Record:
         verdict, name = found
         holds, diff = _rests_on(verdict, EXACT_OF_CLAIM.get((record["check"], record["claim"])))
         out["verdict"] = Verdict.HOLDS if holds else Verdict.VIOLATED
+        if record["solver"] == EXACT_SOLVER:  # exact values are points: no width left
+            out["width"] = 0.0
         extra.update(
             exact_difference=fraction_text(diff),
             exact_difference_float=float(diff),
