@@ -75,8 +75,9 @@ def sink_block(mdp: FiniteMDP, partition: Partition) -> int | None:
     The sink (``mdp.sink``: the last state, absorbing, reward 0, added by a converter for
     the transitions that end an episode) is worth 0 under every policy. In a block with
     live states it shares their variable ``v(i)``: the transitions into it are then worth
-    ``v(i)`` instead of 0, so the aggregated bounds of that block, and of every block that
-    reaches it, are loose (docs/interop.md shows by how much on FrozenLake and Taxi).
+    ``v(i)`` instead of 0 (RLP's row of the sink gives ``v(i) >= 0``), so the aggregated
+    bounds of that block, and of every block that reaches it, can be far looser
+    (docs/interop.md gives the figures on FrozenLake and Taxi).
     """
     if not mdp.sink:
         return None
@@ -98,9 +99,9 @@ def sink_block_note(mdp: FiniteMDP, partition: Partition) -> str | None:
     others = int(partition.sizes[block]) - 1
     note = (
         f"block {block} holds the sink (state {mdp.n_states - 1}, worth 0) and {others} "
-        f"live state{'s' if others > 1 else ''}: valid but loose bounds (a transition into "
-        "the sink is valued at the block's variable, not 0); keep the sink alone: "
-        "lpbounds.random_partition(mdp, M)"
+        f"live state{'s' if others > 1 else ''}: the bounds hold but can be far looser (a "
+        "transition into the sink is valued at the block's variable, not 0); keep the sink "
+        "alone: lpbounds.random_partition(mdp, M)"
     )
     warn(f"partition: {note}", PartitionWarning)
     return note
