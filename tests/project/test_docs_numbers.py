@@ -138,3 +138,49 @@ def test_periodic_floor_number_is_the_formula():
     found = re.search(r"\((\S+) at 0\.999\)", TOLERANCES.read_text())
     assert found
     assert f"{DP_NOISE_ULPS * EPS / (1 - 0.999) ** 2:.1e}" == found.group(1)
+
+
+VERIFY_PAGE = ROOT / "docs" / "verify.md"
+
+
+@pytest.mark.slow
+def test_verify_page_describes_the_default_run():
+    """docs/verify.md's default run (about 12 s): the models it names, the records per
+    solver, the solver-free and cross-solver counts, every one holding, and the widest
+    certified width relative to the requested accuracy per solver (the page's percent,
+    within :data:`SOLVER_FACTOR`: a newer solver may move the digits)."""
+    pytest.importorskip("gymnasium")  # the page's run has the Gymnasium models
+    from lpbounds.studies.verify import run_verification
+
+    text = " ".join(VERIFY_PAGE.read_text().split())
+    para = text[text.index("The default run (") :]
+    para = para[: para.index("name one to verify it.")]
+    records = run_verification().records
+    names = {r["instance"] for r in records}
+    for model in re.findall(r"\b(garnet-small|patrol-small|forest|gridworld|inventory|queue|"
+                            r"savings|frozenlake|cliffwalking|taxi)\b", para):  # fmt: skip
+        assert model in names, model
+    per_solver, free, cross = (int(x) for x in re.search(
+        r"all (\d+) per solver hold, plus the (\d+) solver-free and (\d+) cross-solver", para
+    ).groups())  # fmt: skip
+    counts: dict[str, int] = {}
+    for r in records:
+        counts[r["solver"]] = counts.get(r["solver"], 0) + 1
+    assert all(r["verdict"] == "holds" for r in records)
+    assert counts.pop("exact") == free and counts.pop("all") == cross
+    assert set(counts.values()) == {per_solver}, counts
+    widest = re.findall(r"(\d+) % for ([A-Za-z ]+?) \(", para)
+    assert {s for _, names in widest for s in names.split(" and ")} == {
+        "HiGHS",
+        "SciPy",
+        "Clarabel",
+    }
+    for pct, names in widest:
+        for solver in names.split(" and "):
+            fresh = max(  # Remark 2's records ask for no accuracy (0): left out
+                r["width"] / r["accuracy"]
+                for r in records
+                if r["solver"] == solver.upper() and r["accuracy"]
+            )
+            page = int(pct) / 100
+            assert page / SOLVER_FACTOR <= fresh <= page * SOLVER_FACTOR, (solver, fresh, page)

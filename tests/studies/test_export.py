@@ -124,6 +124,16 @@ def test_partition_option_replaces_the_partition(tmp_path):
     assert np.abs(np.load(out / "optimum.npy") - v).max() <= 1e-10 * np.abs(v).max()
 
 
+def test_a_random_partition_keeps_the_sink_alone(tmp_path):
+    """``random:M`` of a model with a sink: ``random_partition(mdp, M)``, the sink alone."""
+    pytest.importorskip("gymnasium")
+    out = export(tmp_path, "frozenlake", "RLP", "--partition", "random:5:2")
+    labels = np.load(out / "rows.npz")["partition_labels"]
+    mdp = load_case("frozenlake").mdp
+    assert np.array_equal(labels, lb.random_partition(mdp, 5, seed=2).labels)
+    assert (labels == labels[-1]).sum() == 1  # state 16, the sink, alone
+
+
 def test_partition_from_a_labels_file(tmp_path, capsys):
     labels = np.arange(40) % 4
     np.save(tmp_path / "labels.npy", labels)

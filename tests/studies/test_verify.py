@@ -6,6 +6,7 @@ Three-valued verdicts from certified intervals.
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import json
 
 import numpy as np
@@ -415,9 +416,11 @@ def test_cli_unknown_solver(tiny_model, capsys):
 
 def test_shelf_model_sizes_are_known_without_building():
     """The default run verifies the shelf models: their sizes, read from the parameters,
-    are the built models' (a Gymnasium model's stays unknown: None)."""
+    are the built models' (a Gymnasium model's is the built model's, unknown without
+    Gymnasium: None)."""
     from lpbounds.model.instances import load_instance, models_dir
 
+    gym = importlib.util.find_spec("gymnasium") is not None
     seen = set()
     for path in sorted(models_dir().glob("*.toml")):
         inst = load_instance(str(path))
@@ -425,9 +428,24 @@ def test_shelf_model_sizes_are_known_without_building():
             assert verify.estimated_states(inst) == inst.mdp().n_states, path.name
             seen.add(inst.kind)
         elif inst.kind == "gymnasium":
-            assert verify.estimated_states(inst) is None
+            expected = load_instance(str(path)).mdp().n_states if gym else None
+            assert verify.estimated_states(inst) == expected, path.name
     assert seen == {"forest", "gridworld", "admission_queue", "inventory", "savings"}
     insts, skipped = verify.model_instances(max_states=10_000)
     names = {i.name for i in insts}
     assert {"forest", "gridworld", "queue", "inventory", "savings"} <= names
     assert "patrol-paper" in skipped and "forest" not in skipped
+
+
+def test_the_default_run_verifies_the_gymnasium_models():
+    """With Gymnasium installed the default run (no model named) verifies FrozenLake (17
+    states with the sink), CliffWalking (49) and Taxi (501), which it used to skip as of
+    unknown size; a --max-states below a model's size still skips it, by its size."""
+    pytest.importorskip("gymnasium")
+    insts, skipped = verify.model_instances(max_states=10_000)
+    sizes = {i.name: i.mdp.n_states for i in insts}
+    assert {"frozenlake": 17, "cliffwalking": 49, "taxi": 501}.items() <= sizes.items()
+    assert not {"frozenlake", "cliffwalking", "taxi"} & set(skipped)
+    insts, skipped = verify.model_instances(max_states=100)
+    assert "frozenlake" in {i.name for i in insts} and "cliffwalking" in {i.name for i in insts}
+    assert "taxi" in skipped and "taxi" not in {i.name for i in insts}

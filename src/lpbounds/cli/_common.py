@@ -9,6 +9,7 @@ import logging
 import math
 import os
 import sys
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
@@ -209,18 +210,48 @@ def configure_output(quiet: bool = False, verbose: bool = False) -> Iterator[Non
     console.quiet = err_console.quiet = quiet
     show_solver_output(verbose)
     try:
-        if verbose:
-            from ..outputs import metadata_lines, run_metadata
+        with warnings.catch_warnings():
+            _log_lpbounds_warnings(log)
+            if verbose:
+                from ..outputs import metadata_lines, run_metadata
 
-            for line in metadata_lines(run_metadata()):
-                log.debug(line)
-        yield
+                for line in metadata_lines(run_metadata()):
+                    log.debug(line)
+            yield
     finally:
         log.removeHandler(handler)
         log.setLevel(saved[0])
         log.propagate = saved[1]
         console.quiet, err_console.quiet = saved[2], saved[3]
         show_solver_output(False)
+
+
+def _log_lpbounds_warnings(log: logging.Logger) -> None:
+    """Inside a ``warnings.catch_warnings()``: lpbounds' own warnings
+    (:class:`~lpbounds.errors.LPBoundsWarning`) go to ``log`` at WARNING, each text once per
+    command (a warning of every instance verified would repeat it), with one label and no
+    source line of the console script; other warnings are shown as Python shows them."""
+    from ..errors import LPBoundsWarning
+
+    seen: set[str] = set()
+    shown = warnings.showwarning
+
+    def show(
+        message: Warning | str,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: Any = None,
+        line: str | None = None,
+    ) -> None:
+        if not issubclass(category, LPBoundsWarning):
+            shown(message, category, filename, lineno, file, line)
+        elif str(message) not in seen:
+            seen.add(str(message))
+            log.warning("%s", message)
+
+    warnings.showwarning = show
+    warnings.simplefilter("always", LPBoundsWarning)  # once per text: counted here
 
 
 def add_model_argument(parser: argparse.ArgumentParser, default: str | None = None) -> None:

@@ -57,8 +57,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--partition",
         metavar="SPEC",
         default=None,
-        help="replace the model's partition: random:M[:SEED] or a .npy file of labels "
-        "(RLP, SLP, IB)",
+        help="replace the model's partition: random:M[:SEED] (a sink kept in a set of its "
+        "own) or a .npy file of labels (RLP, SLP, IB)",
     )
     p.add_argument("--format", dest="fmt", default="mps", metavar="mps|lp", help="default mps")
     p.add_argument(

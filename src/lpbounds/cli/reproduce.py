@@ -133,9 +133,10 @@ def run(args: argparse.Namespace) -> int:
         p = s.paper_table1[key]
         t.add_row(
             f"Monte Carlo {label}",
-            f"loiters {m.mean_loiters:.2f} ({p['mean_loiters']}), "
-            f"delay {m.mean_delay:.2f} ({p['mean_delay']}), "
-            f"worst {m.worst_delay} ({p['worst_delay']})  [paper in brackets]",
+            f"loiters {m.mean_loiters:.2f} (paper {p['mean_loiters']}); delay counted to "
+            f"the first loiter / to its end: mean {m.mean_delay:.2f} / "
+            f"{m.mean_delay_plus_one:.2f} (paper {p['mean_delay']}), worst {m.worst_delay} / "
+            f"{m.worst_delay_plus_one} (paper {p['worst_delay']})",
         )
     t.add_row("total", f"{s.seconds_total:.1f} s")
     t.add_row("written", str(rep.out))

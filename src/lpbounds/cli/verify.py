@@ -241,6 +241,10 @@ def run(args: argparse.Namespace) -> int:
     ]
     if given:
         raise ValidationError(f"{given[0]} belongs to a campaign: give --out DIR as well")
+    if args.json:  # before any computation, as every command checks its outputs
+        from ..outputs import check_output_file
+
+        check_output_file(args.json, "--json")
     solvers = [resolve_solver(s) for s in (args.solvers or default_solvers())]
     return _run_models(args, solvers, claims)
 

@@ -535,6 +535,9 @@ class Formulation:
     """
 
     name: str = "LP"
+    #: What is weak about the partition, for the results' summary (set by a formulation
+    #: over a partition: :func:`lpbounds.model.checks.sink_block_note`); None when nothing.
+    partition_note: str | None = None
     #: Judge only the upper side of the certificate (formulations whose point dominates,
     #: rather than equals, the certified fixed point: ALP, LLP).
     upper_side_only: bool = False
@@ -1304,6 +1307,8 @@ class Formulation:
         values, state_values, mu, extra = self._interpret(x, y)
         # the solver's own word for its answer, beside lpbounds' status from the certificate
         extra = {**extra, "solver_status": run.message, **run.extra}
+        if self.partition_note is not None:
+            extra["partition_note"] = self.partition_note
         return LPResult(
             formulation=self.name,
             status=status,

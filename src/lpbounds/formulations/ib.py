@@ -15,7 +15,7 @@ import scipy.sparse as sp
 
 from ..certification.certificate import Certificate, certify
 from ..errors import ValidationError
-from ..model.checks import check_formulation_inputs
+from ..model.checks import check_formulation_inputs, sink_block_note
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
 from ..rows import BellmanRows
@@ -95,6 +95,7 @@ class IB(RowsLP):
             raise ValidationError(f"L must be an integer >= 1; got {L!r}")
         self.mdp = mdp
         self.partition = partition
+        self.partition_note = sink_block_note(mdp, partition)
         self.L = int(L)
         c = check_cost(cost, mdp.n_states)
         cbar = np.bincount(partition.labels, weights=c, minlength=partition.n_partitions)
@@ -286,6 +287,7 @@ class LLP(Formulation):
         check_formulation_inputs(mdp, partition, cost=cost, d=d)
         self.mdp = mdp
         self.partition = partition
+        self.partition_note = sink_block_note(mdp, partition)
         n, n_actions = mdp.n_states, mdp.n_actions
         d_arr = np.asarray(d, dtype=np.float64)
         if d_arr.shape != (n, n_actions):

@@ -84,7 +84,10 @@ class LPResult(Result):
         Formulation-specific data (e.g. IB's blocks); ``extra["message"]`` on failure;
         ``extra["solver_claim"]`` ("infeasible" or "unbounded") where the solver claimed
         what the formulation's structure excludes; ``extra["lp_scaling"]`` (``{"b": kb,
-        "c": kc}``) where the solver saw ``b 2**-kb`` and ``c 2**-kc``.
+        "c": kc}``) where the solver saw ``b 2**-kb`` and ``c 2**-kc``;
+        ``extra["partition_note"]`` where the partition mixes the model's sink with live
+        states (valid, loose bounds: :func:`lpbounds.model.checks.sink_block_note`), shown
+        by :meth:`summary`.
     modified : bool
         True for a solve with ``extra_constraints``: then ``lower_values``/``upper_values``
         and ``certificate`` are about the ORIGINAL problem's optimum (still valid, see
@@ -174,4 +177,6 @@ class LPResult(Result):
             items.append(("modified", f"{len(self.extra_residuals)} extra constraints"))
         if "message" in self.extra:
             items.append(("message", str(self.extra["message"])))
+        if "partition_note" in self.extra:
+            items.append(("partition", str(self.extra["partition_note"])))
         return items

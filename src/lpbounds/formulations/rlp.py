@@ -22,7 +22,7 @@ from typing import Any
 import cvxpy as cp
 import numpy as np
 
-from ..model.checks import check_formulation_inputs
+from ..model.checks import check_formulation_inputs, sink_block_note
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
 from ..rows import BellmanRows
@@ -83,6 +83,7 @@ class RLP(RowsLP):
         cbar = aggregated_cost(mdp, partition, cost, partition_cost)
         self.mdp = mdp
         self.partition = partition
+        self.partition_note = sink_block_note(mdp, partition)
         if rows is None:
             rows = BellmanRows.aggregate(mdp, partition, reduce="max")
         super().__init__(rows, cbar)

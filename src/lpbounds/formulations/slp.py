@@ -61,7 +61,7 @@ import scipy.sparse as sp
 
 from ..certification.certificate import Certificate
 from ..errors import ValidationError
-from ..model.checks import check_formulation_inputs
+from ..model.checks import check_formulation_inputs, sink_block_note
 from ..model.mdp import FiniteMDP
 from ..model.partition import Partition
 from ..rows import BellmanRows
@@ -152,6 +152,7 @@ class SLP(RowsLP):
         cbar = aggregated_cost(mdp, partition, cost, None)
         self.mdp = mdp
         self.partition = partition
+        self.partition_note = sink_block_note(mdp, partition)
         self.mu = _check_mu(mu, mdp, partition)
         rows, weights, row_of_pair = _surrogate_rows(mdp, partition, self.mu)
         self.weights = weights

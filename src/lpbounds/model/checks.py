@@ -8,12 +8,18 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..errors import ValidationError
+from ..errors import PartitionWarning, ValidationError, warn
 from ..validation import NUMERIC_KINDS, check_array, describe_value
 from .mdp import FiniteMDP
 from .partition import Partition
 
-__all__ = ["check_formulation_inputs", "check_model", "check_partition"]
+__all__ = [
+    "check_formulation_inputs",
+    "check_model",
+    "check_partition",
+    "sink_block",
+    "sink_block_note",
+]
 
 
 def check_model(mdp: Any, name: str = "mdp") -> Any:
@@ -60,3 +66,42 @@ def check_formulation_inputs(mdp: Any, partition: Any = _NO_PARTITION, **arrays:
                 raise ValidationError(f"{key} must hold real numbers; got dtype {value.dtype}")
             continue
         check_array(key, value, finite=False)
+
+
+def sink_block(mdp: FiniteMDP, partition: Partition) -> int | None:
+    """The block of ``partition`` that holds ``mdp``'s sink together with live states, or
+    None (no sink, or the sink alone in its block).
+
+    The sink (``mdp.sink``: the last state, absorbing, reward 0, added by a converter for
+    the transitions that end an episode) is worth 0 under every policy. In a block with
+    live states it shares their variable ``v(i)``: the transitions into it are then worth
+    ``v(i)`` instead of 0 (RLP's row of the sink gives ``v(i) >= 0``), so the aggregated
+    bounds of that block, and of every block that reaches it, can be far looser
+    (docs/interop.md gives the figures on FrozenLake and Taxi).
+    """
+    if not mdp.sink:
+        return None
+    block = int(partition.labels[mdp.n_states - 1])
+    return block if int(partition.sizes[block]) > 1 else None
+
+
+def sink_block_note(mdp: FiniteMDP, partition: Partition) -> str | None:
+    """A :class:`~lpbounds.errors.PartitionWarning` when ``partition`` mixes ``mdp``'s sink
+    with live states (:func:`sink_block`), at the caller's line; returns its text (for the
+    result's summary), or None when the partition keeps the sink alone or there is none.
+
+    The partition is valid and every bound computed from it holds: the warning says that
+    they are weaker than they need to be, and how to keep the sink in a block of its own.
+    """
+    block = sink_block(mdp, partition)
+    if block is None:
+        return None
+    others = int(partition.sizes[block]) - 1
+    note = (
+        f"block {block} holds the sink (state {mdp.n_states - 1}, worth 0) and {others} "
+        f"live state{'s' if others > 1 else ''}: the bounds hold but can be far looser (a "
+        "transition into the sink is valued at the block's variable, not 0); keep the sink "
+        "alone: lpbounds.random_partition(mdp, M)"
+    )
+    warn(f"partition: {note}", PartitionWarning)
+    return note

@@ -17,7 +17,7 @@ from ..validation import (
     check_value_scale,
 )
 from .mdp import FiniteMDP, index_dtype
-from .partition import Partition
+from .partition import Partition, with_sink_block
 
 __all__ = [
     "check_garnet_rewards",
@@ -91,21 +91,50 @@ def garnet(
     return FiniteMDP(succ, probs, rewards, discount, allowed)
 
 
-def random_partition(n_states: int, n_partitions: int, seed: int | None = 0) -> Partition:
-    """A uniformly random partition of ``n_states`` states into exactly ``n_partitions`` sets."""
+def random_partition(
+    n_states: int | FiniteMDP, n_partitions: int, seed: int | None = 0
+) -> Partition:
+    """A uniformly random partition into exactly ``n_partitions`` sets.
+
+    Parameters
+    ----------
+    n_states : int or FiniteMDP
+        The number of states, or the model whose states are partitioned. A model with a
+        sink (``mdp.sink``: the absorbing end state a converter adds, worth 0 under every
+        policy) gets the sink in a set of its own, the last (index ``n_partitions - 1``),
+        and its other ``n - 1`` states split at random into the ``n_partitions - 1``
+        others: a set that mixes the sink with live states gives them loose bounds
+        (:func:`lpbounds.model.checks.sink_block`). A model without a sink gets the
+        partition of its state count (the same labels).
+    n_partitions : int
+        ``M``, in ``[1, n]`` (in ``[2, n]`` for a model with a sink).
+    seed : int or None
+        Seed of :func:`numpy.random.default_rng`; the same seed gives the same partition.
+
+    Returns
+    -------
+    Partition
+        Every set non-empty; each state's set uniform among those that keep every set used.
+    """
+    sink = isinstance(n_states, FiniteMDP) and n_states.sink
+    if isinstance(n_states, FiniteMDP):
+        n_states = n_states.n_states
     n_states = check_int("n_states", n_states, lo=1)
     n_partitions = check_int("n_partitions", n_partitions, lo=1)
-    if n_partitions > n_states:
+    low = 2 if sink else 1
+    if not low <= n_partitions <= n_states:
+        why = " (the model has a sink, kept in a set of its own)" if sink else ""
         raise ValidationError(
-            f"n_partitions must lie in [1, n_states={n_states}]; got {n_partitions}"
+            f"n_partitions must lie in [{low}, n_states={n_states}]{why}; got {n_partitions}"
         )
     # the labels, the permutation that places one state in each set, and their range
     check_allocation(f"n_states = {n_states}", 8 * (2 * n_states + n_partitions), "the labels")
     seed = check_seed("seed", seed)
     rng = np.random.default_rng(seed)
-    labels = rng.integers(0, n_partitions, size=n_states)
-    labels[rng.permutation(n_states)[:n_partitions]] = np.arange(n_partitions)
-    return Partition(labels)
+    live, sets = n_states - int(sink), n_partitions - int(sink)
+    labels = rng.integers(0, sets, size=live)
+    labels[rng.permutation(live)[:sets]] = np.arange(sets)
+    return with_sink_block(labels, sink)
 
 
 def garnet_bytes(

@@ -12,8 +12,8 @@ A file has a ``[model]`` table whose ``kind`` picks a builder, and optionally a
     seed = 1
 
     [partition]
-    kind = "random"          # lpbounds.model.generators.random_partition
-    n_partitions = 50
+    kind = "random"          # lpbounds.model.generators.random_partition (of the model:
+    n_partitions = 50        # a sink, if it has one, in a set of its own)
     seed = 2
 
 Builders are registered in :data:`MODEL_KINDS` and :data:`PARTITION_KINDS` (kind ->
@@ -336,7 +336,7 @@ def _build_random_partition(table: Mapping[str, Any], instance: Instance) -> Par
     c = check_keys(table, {"n_partitions": ..., "seed": 0}, "partition")
     n_partitions = check_int("[partition] n_partitions", c["n_partitions"], lo=1)
     seed = check_int("[partition] seed", c["seed"], lo=0)
-    return random_partition(instance.mdp().n_states, n_partitions, seed)
+    return random_partition(instance.mdp(), n_partitions, seed)
 
 
 # ---------------------------------------------------------------------- explicit arrays

@@ -19,7 +19,7 @@ from .mdp import index_dtype
 if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is built (0.1 s at start-up)
     import scipy.sparse as sp
 
-__all__ = ["Partition"]
+__all__ = ["Partition", "with_sink_block"]
 
 
 class Partition:
@@ -162,3 +162,12 @@ class Partition:
 
     def __repr__(self) -> str:
         return f"Partition(n_states={self.n_states}, n_partitions={self.n_partitions})"
+
+
+def with_sink_block(labels: Any, sink: bool) -> Partition:
+    """The partition of ``labels`` and, with ``sink``, one more state (a model's sink, its
+    last state) in a block of its own, numbered after the others."""
+    lab = check_array("labels", labels, integer=True)
+    if sink:
+        lab = np.append(lab, int(lab.max()) + 1 if lab.size else 0)
+    return Partition(lab)

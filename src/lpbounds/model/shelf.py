@@ -55,7 +55,7 @@ from ..validation import (
     describe_value,
 )
 from .mdp import FiniteMDP, index_dtype
-from .partition import Partition
+from .partition import Partition, with_sink_block
 
 if TYPE_CHECKING:
     from .instances import Instance
@@ -704,18 +704,23 @@ def model_sizes(table: Mapping[str, Any]) -> ModelSizes:
 
 
 # ---------------------------------------------------------------------- partitions
-def _with_sink(labels: np.ndarray, sink: bool) -> Partition:
-    if sink:
-        labels = np.append(labels, labels.max() + 1 if labels.size else 0)
-    return Partition(labels)
-
-
-def block_partition(n_states: int, size: int, sink: bool = False) -> Partition:
+def block_partition(n_states: int | FiniteMDP, size: int, sink: bool = False) -> Partition:
     """States ``0..n_states-1`` in consecutive blocks of ``size`` (the last may be smaller);
-    with ``sink``, one more state, the sink, in a block of its own."""
+    with ``sink``, one more state, the sink, in a block of its own.
+
+    Given a model instead of ``n_states``, its states: those before its sink (all of them
+    without one) in blocks, and its sink (``mdp.sink``) in a block of its own; ``sink=True``
+    is then refused unless the model has one.
+    """
+    sink = check_bool("sink", sink)
+    if isinstance(n_states, FiniteMDP):
+        mdp = n_states
+        if sink and not mdp.sink:
+            raise ValidationError("sink=True but the model has no sink (mdp.sink is False)")
+        n_states, sink = mdp.n_user_states, mdp.sink
     n = check_int("n_states", n_states, lo=1)
     size = check_int("size", size, lo=1)
-    return _with_sink(np.arange(n) // size, check_bool("sink", sink))
+    return with_sink_block(np.arange(n) // size, sink)
 
 
 def grid_partition(
@@ -736,7 +741,7 @@ def grid_partition(
     r, c = np.divmod(cell, cols)
     tiles_across = -(-cols // w)
     labels = ((r // h) * tiles_across + c // w) * inner + k
-    return _with_sink(labels, check_bool("sink", sink))
+    return with_sink_block(labels, check_bool("sink", sink))
 
 
 def _user_states(instance: Instance) -> tuple[int, bool]:

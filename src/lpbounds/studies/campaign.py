@@ -29,7 +29,9 @@ Instances
 
     Partitions: ``random`` (1 to ``n/2`` blocks), ``coarse`` (2-3 blocks), ``singletons``,
     ``value-ordered`` (states sorted by ``V*``, cut into 2 to ``n/2`` runs of consecutive
-    values: the partition aggregation theory favours) and ``one-block``.
+    values: the partition aggregation theory favours) and ``one-block``. A model with a
+    sink (``mdp.sink``; no family draws one today) keeps it in a block of its own in every
+    kind, as :func:`~lpbounds.model.generators.random_partition` of a model does.
 
 Batches, disk and resuming
     The instances run in batches of ``batch_size`` consecutive indices, serially, on one of
@@ -115,7 +117,7 @@ from ..errors import OutputError, SizeLimitError, SolverNotInstalledError, Valid
 from ..formulations import resolve_solver
 from ..model.generators import garnet, random_partition
 from ..model.mdp import FiniteMDP
-from ..model.partition import Partition
+from ..model.partition import Partition, with_sink_block
 from ..outputs import file_sha256, write_atomic, write_text_atomic
 from ..tolerances import LP_COMPARE_RTOL
 from .claims import (
@@ -261,7 +263,9 @@ def _reward_scale(rng: np.random.Generator) -> float:
 
 def _scaled(mdp: FiniteMDP, scale: float) -> FiniteMDP:
     rewards = np.where(mdp.allowed, np.asarray(mdp.rewards) * scale, 0.0)
-    return FiniteMDP(mdp.successors, mdp.probabilities, rewards, mdp.discount, mdp.allowed)
+    return FiniteMDP(
+        mdp.successors, mdp.probabilities, rewards, mdp.discount, mdp.allowed, sink=mdp.sink
+    )
 
 
 Drawn = tuple[FiniteMDP, dict[str, Any], Partition | None]
@@ -355,22 +359,26 @@ FAMILY_WEIGHTS: dict[str, float] = {
 
 
 def _partition(kind: str, mdp: FiniteMDP, rng: np.random.Generator) -> Partition:
-    n = mdp.n_states
+    """A partition of ``kind`` of ``mdp``'s states; a sink (``mdp.sink``) keeps a block of
+    its own in every kind (``one-block``: the other states in one), as
+    :func:`~lpbounds.model.generators.random_partition` of the model does."""
+    n = mdp.n_user_states  # the states but the sink; all of them without one
     if kind == "singletons":
-        return Partition.singletons(n)
+        return Partition.singletons(mdp.n_states)
     if kind == "one-block":
-        return Partition(np.zeros(n, dtype=np.int64))
+        return with_sink_block(np.zeros(n, dtype=np.int64), mdp.sink)
     if kind == "coarse":
-        return random_partition(n, min(n, int(rng.integers(2, 4))), seed=int(rng.integers(2**31)))
+        m = min(n, int(rng.integers(2, 4)))
+        return random_partition(mdp, m + int(mdp.sink), seed=int(rng.integers(2**31)))
     low = 1 if kind == "random" else min(n, 2)
     m = int(rng.integers(low, max(low, n // 2) + 1))
     if kind == "random":
-        return random_partition(n, m, seed=int(rng.integers(2**31)))
+        return random_partition(mdp, m + int(mdp.sink), seed=int(rng.integers(2**31)))
     lo, hi = exact_interval(mdp, "pi")  # value-ordered: runs of consecutive V*
-    order = np.argsort(0.5 * (lo + hi), kind="stable")
+    order = np.argsort(0.5 * (lo + hi)[:n], kind="stable")
     labels = np.empty(n, dtype=np.int64)
     labels[order] = np.arange(n) * m // n
-    return Partition(labels)
+    return with_sink_block(labels, mdp.sink)
 
 
 @dataclass

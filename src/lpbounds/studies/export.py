@@ -161,28 +161,29 @@ def check_formulation(name: Any) -> str:
     return key
 
 
-def _partition_from_spec(spec: str, n_states: int) -> Any:
-    """``random:M[:SEED]`` (:func:`lpbounds.model.generators.random_partition`) or a ``.npy``
-    file of one partition label per state; every error is an :class:`ExportArgumentError`
-    of argument ``"partition"``."""
+def _partition_from_spec(spec: str, mdp: Any) -> Any:
+    """``random:M[:SEED]`` (:func:`lpbounds.model.generators.random_partition` of ``mdp``: a
+    sink in a set of its own) or a ``.npy`` file of one partition label per state; every
+    error is an :class:`ExportArgumentError` of argument ``"partition"``."""
     try:
-        return _build_partition(spec, n_states)
+        return _build_partition(spec, mdp)
     except ExportArgumentError:
         raise
     except ValidationError as exc:
         raise ExportArgumentError("partition", spec, str(exc)) from exc
 
 
-def _build_partition(spec: str, n_states: int) -> Any:
+def _build_partition(spec: str, mdp: Any) -> Any:
     from ..model.generators import random_partition
     from ..model.partition import Partition
 
+    n_states = mdp.n_states
     if spec.startswith("random:"):
         parts = spec.split(":")[1:]
         if not 1 <= len(parts) <= 2 or not all(p.isdigit() for p in parts):
             raise ExportArgumentError("partition", spec, "must be written random:M[:SEED]", " ")
         seed = int(parts[1]) if len(parts) == 2 else 0
-        return random_partition(n_states, int(parts[0]), seed)
+        return random_partition(mdp, int(parts[0]), seed)
     path = Path(spec)
     if path.suffix != ".npy" or not path.is_file():
         raise ExportArgumentError(
@@ -217,7 +218,7 @@ def resolve_case(model: str, formulation: str, partition: str | None = None) -> 
         raise ExportArgumentError(
             "partition", NO_VALUE, f"does not apply: {formulation} {why}", " "
         )
-    part = _partition_from_spec(str(partition), case.mdp.n_states)
+    part = _partition_from_spec(str(partition), case.mdp)
     return Case(case.spec, case.name, case.instance, case.mdp, part)
 
 

@@ -119,7 +119,7 @@ from ..certification.checks import (
     lp_objective_bracket,
 )
 from ..dp import exact_rows, solve_exact
-from ..errors import ConvergenceError, LPBoundsError, ValidationError
+from ..errors import ConvergenceError, LPBoundsError, SolverNotInstalledError, ValidationError
 from ..exact.rationals import fraction_text, solve_rational
 from ..formulations import (
     ELP,
@@ -367,12 +367,19 @@ def estimated_states(inst: Any) -> int | None:
     -------
     int or None
         ``[model] n_states`` when the file gives it, a patrol model's or a shelf model's
-        count from its parameters (:func:`lpbounds.model.shelf.model_sizes`), else None
-        (a Gymnasium model's size is not known without building its environment).
+        count from its parameters (:func:`lpbounds.model.shelf.model_sizes`), a Gymnasium
+        model's from the model itself (built: a toy-text environment holds its whole table
+        ``P`` once made, so the model costs what making the environment does), else None
+        (Gymnasium not installed; a patrol without its package).
     """
     size = inst.config["model"].get("n_states")
     if isinstance(size, int):
         return size
+    if inst.kind == "gymnasium":
+        try:
+            return int(inst.mdp().n_states)  # kept by the instance: verified as built here
+        except SolverNotInstalledError:
+            return None
     from ..model import shelf
 
     if inst.kind in shelf.SHELF_KINDS:

@@ -98,13 +98,22 @@ def test_values_match_value_iteration_on_p(name, discount):
     assert lo.shape == hi.shape == (n,)
 
 
+@pytest.mark.parametrize("mixed", [False, True], ids=["sink-alone", "sink-mixed"])
 @pytest.mark.parametrize("name", ["FrozenLake-4x4-slippery", "Taxi", "CliffWalking"])
-def test_rlp_upper_bound_holds(name):
+def test_rlp_upper_bound_holds(name, mixed):
+    """With the partition of the model (the sink alone) and with that of the state count,
+    which puts the sink among live states: a valid bound either way, the second said."""
     env = _env(name)
     mdp = from_gymnasium(FM, env, 0.9)
     v_star = lb.solve_exact(mdp, tol=_tight_tol(env)).values
-    partition = lb.random_partition(mdp.n_states, 4, seed=0)
-    res = RLP(mdp, partition).solve()
+    if mixed:
+        partition = lb.random_partition(mdp.n_states, 4, seed=0)
+        with pytest.warns(lb.errors.PartitionWarning, match="holds the sink"):
+            form = RLP(mdp, partition)
+    else:
+        partition = lb.random_partition(mdp, 4, seed=0)
+        form = RLP(mdp, partition)
+    res = form.solve()
     assert res.status == lb.Status.OPTIMAL
     assert np.all(partition.lift(res.upper_values) >= v_star - 1e-9)
 

@@ -81,3 +81,21 @@ def test_section_code_runs(heading, tmp_path, monkeypatch, capsys):
     namespace: dict[str, object] = {"__name__": "docs_interop"}
     for k, block in enumerate(blocks):
         exec(compile(block, f"interop.md[{heading}, block {k}]", "exec"), namespace)
+
+
+def test_the_sink_table_is_what_its_block_asserts():
+    """The table of "Partitions: the sink in a set of its own" shows the figures its block
+    computes and asserts (``assert rows == {...}``; the block runs in the Gymnasium
+    section above), so the page's table cannot drift from the run."""
+    text = PAGE.read_text()
+    part = text[text.index("### Partitions: the sink in a set of its own") :]
+    part = part[: part.index("\n## ")]
+    table = {
+        cells[0].split(",")[0].strip().lower(): tuple(c.strip() for c in cells[1:])
+        for line in part.splitlines()
+        if line.startswith("| ") and not line.startswith("| model")
+        for cells in [line.strip().strip("|").split("|")]
+    }
+    asserted = re.search(r"^assert rows == (\{.*?^\})", part, re.S | re.M)
+    assert asserted, "the block asserts no table"
+    assert table == ast.literal_eval(asserted.group(1))

@@ -95,6 +95,7 @@ import scipy.sparse as sp
 from ...certification.certificate import Certificate, certify
 from ...dp import solve_exact, solve_game, threads_for
 from ...errors import ConvergenceError, SolverError, ValidationError
+from ...model.checks import sink_block_note
 from ...model.mdp import FiniteMDP
 from ...model.partition import Partition
 from ...rows import BellmanRows
@@ -228,6 +229,7 @@ class NLP:
         if not isinstance(partition, Partition):
             raise ValidationError(f"partition must be a Partition; got {type(partition).__name__}")
         cbar = aggregated_cost(mdp, partition, cost, partition_cost)
+        self.partition_note = sink_block_note(mdp, partition)
         # HiGHS' banner to the log before anything can solve this NLP's models (its MILP
         # and masters are cvxpy problems a user may solve directly); once per process
         silence_highs_banner()
@@ -572,7 +574,9 @@ class NLP:
             solver=out.solver,
             gap_rtol=gap_rtol,
             scale=self.scale,
-            extra=out.extra,
+            extra=out.extra
+            if self.partition_note is None
+            else {**out.extra, "partition_note": self.partition_note},
         )
 
     def _limit(self, t0: float, time_limit: float | None) -> bool:

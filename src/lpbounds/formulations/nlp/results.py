@@ -178,6 +178,8 @@ class NLPResult(Result):
         ]  # fmt: skip
         if self.method == "cutting-planes":
             items.append(("cuts", self._cuts_text()))
+        if "partition_note" in self.extra:
+            items.append(("partition", str(self.extra["partition_note"])))
         return items
 
     def log_table(self) -> pd.DataFrame:
