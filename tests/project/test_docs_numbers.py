@@ -81,7 +81,9 @@ def _check(model: str, lp: str) -> None:
 
 
 @pytest.mark.parametrize(
-    ("model", "lp"), [r for r in BENCH.ROWS if not r[0].startswith(SLOW)], ids=" ".join
+    ("model", "lp"),
+    [r for r in BENCH.ROWS if not r[0].startswith(SLOW)],
+    ids=[f"{m} {lp}" for m, lp in BENCH.ROWS if not m.startswith(SLOW)],
 )
 def test_lp_accuracy_row_matches_a_fresh_run(model, lp):
     _check(model, lp)
@@ -89,7 +91,9 @@ def test_lp_accuracy_row_matches_a_fresh_run(model, lp):
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("model", "lp"), [r for r in BENCH.ROWS if r[0].startswith(SLOW)], ids=" ".join
+    ("model", "lp"),
+    [r for r in BENCH.ROWS if r[0].startswith(SLOW)],
+    ids=[f"{m} {lp}" for m, lp in BENCH.ROWS if m.startswith(SLOW)],
 )
 def test_lp_accuracy_row_at_the_papers_size_matches_a_fresh_run(model, lp):
     _check(model, lp)
