@@ -231,3 +231,42 @@ def test_a_records_exact_error_is_the_largest_of_its_solves():
         assert r["exact_error_float"] == float(max(objective))
         assert Fraction(r["exact_value_error"]) == max(point)
         assert r["inside_bracket"] is True
+
+
+def test_a_planted_bracket_that_misses_is_counted_and_fails_the_run():
+    """A float solve whose certified bracket misses the exact optimum by a known amount:
+    the judge says so, the record says so, the summary counts it and the exit status is 1
+    (the check can fail, not only pass)."""
+    import copy
+
+    from lpbounds.studies.verify import judged_fields
+
+    mdp, part = _tiny()
+    cost = np.array([1.0, 0.25, 3.0, 0.5])
+    _, x = rlp_optimum(mdp, part, cost)
+    form = RLP(mdp, part, cost)
+    res = form.solve("HIGHS")
+    judge = ExactJudge()
+    honest = judge(form, res)
+    assert honest.inside_bracket is True
+    planted = copy.copy(res)
+    k = len(x) - 1
+    shift = 2.0**-10  # the bracket of the last entry moved wholly below its exact value
+    upper = np.array(res.upper_values, dtype=np.float64)
+    lower = np.array(res.lower_values, dtype=np.float64)
+    upper[k] = float(x[k]) - shift
+    lower[k] = upper[k] - 1e-9
+    planted.upper_values, planted.lower_values = upper, lower
+    missed = judge(form, planted)
+    assert Fraction(float(upper[k])) < x[k]  # missed in exact arithmetic
+    assert missed.inside_bracket is False
+    fields = judged_fields([honest, missed])
+    assert fields["inside_bracket"] is False
+    assert judged_fields([honest])["inside_bracket"] is True
+    record = {"check": "Theorem 1", "solver": "HIGHS", "verdict": "holds", "width": 0.0,
+              "accuracy": 1.0, "float_verdict": "holds", **fields}  # fmt: skip
+    assert exit_status([record]) == 1
+    assert exit_status([{**record, "inside_bracket": True}]) == 0
+    assert exit_status([{**record, "inside_bracket": "False"}]) == 1  # read back from CSV
+    (row,) = summarize([record])
+    assert row["missed"] == 1 and row["disagree"] == 0
