@@ -1673,7 +1673,10 @@ def exit_status(records: Sequence[Record], *, strict: bool = False) -> int:
 
 
 def write_json(records: list[Record], path: str | Path) -> None:
-    """Write the records as a JSON list."""
+    """Write the records as a JSON list, atomically (:func:`~lpbounds.outputs.write_text_atomic`:
+    the file holds its previous content or the whole list, never a part)."""
     import json
 
-    Path(path).write_text(json.dumps(records, indent=2))
+    from ..outputs import write_text_atomic
+
+    write_text_atomic(path, json.dumps(records, indent=2))
