@@ -14,9 +14,11 @@
 # **Theorem 1** of the paper: the restricted LP (eq. 9),
 #
 # $$
-# RLP := \min \sum_{i=1}^M \bar c(i)\, v(i) \quad \text{s.t.} \quad
-# v(i) \ge R_u(x) + \lambda \sum_{l} p_l\, v(\bar f(x, u, Y_l))
+# \begin{array}{l}
+# RLP := \min \sum_{i=1}^M \bar c(i)\, v(i) \quad \text{s.t.} \\
+# \qquad v(i) \ge R_u(x) + \lambda \sum_{l} p_l\, v(\bar f(x, u, Y_l))
 # \quad \forall x \in S_i,\ \forall u ,
+# \end{array}
 # $$
 #
 # has the same optimum $v^*$ for every cost $c \ge 0$. The float notebook
