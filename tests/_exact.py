@@ -122,12 +122,14 @@ def nlp_groups(succ, probs, rewards, allowed, discount, labels) -> Groups:
     return Groups(gs, fr(discount))
 
 
-def solve_linear(a: list[list[Fraction]], b: list[Fraction]) -> list[Fraction]:
-    """Gauss-Jordan elimination over the rationals (``a`` non-singular)."""
+def gauss(a: list[list[Fraction]], b: list[Fraction]) -> list[Fraction] | None:
+    """The solution of the square system ``a x = b``, or ``None`` if ``a`` is singular."""
     n = len(b)
     m = [[*row, b[i]] for i, row in enumerate(a)]
     for col in range(n):
-        piv = next(r for r in range(col, n) if m[r][col] != 0)
+        piv = next((r for r in range(col, n) if m[r][col] != 0), None)
+        if piv is None:
+            return None
         m[col], m[piv] = m[piv], m[col]
         p = m[col][col]
         m[col] = [x / p for x in m[col]]
@@ -145,7 +147,9 @@ def evaluate(ops: Groups, chosen: list[Row]) -> list[Fraction]:
     for i, (_, dist) in enumerate(chosen):
         for t, p in dist.items():
             a[i][t] -= ops.discount * p
-    return solve_linear(a, [r for r, _ in chosen])
+    v = gauss(a, [r for r, _ in chosen])
+    assert v is not None, "a policy's (I - lambda P) is singular"
+    return v
 
 
 def _min_reply(ops: Groups, sigma: list[int]) -> list[Fraction]:

@@ -1,6 +1,7 @@
 """Exact references written here, independent of lpbounds: Python's Fractions only.
 
-* :func:`gauss` -- Gauss-Jordan elimination in Fractions (``None`` when singular);
+* :func:`gauss` -- Gauss-Jordan elimination in Fractions (``None`` when singular), from
+  ``tests/_exact.py``, the references every folder shares;
 * :func:`vstar` -- ``V*`` of a stored model by enumerating its deterministic policies;
 * :func:`lp_optimum` -- the optimum of ``min c'x s.t. A x >= b`` (``x`` free) by
   enumerating every basis (every set of ``N`` rows), for tiny LPs;
@@ -18,25 +19,9 @@ from fractions import Fraction
 
 import numpy as np
 
+from tests._exact import gauss
+
 F = Fraction
-
-
-def gauss(a: list[list[Fraction]], b: list[Fraction]) -> list[Fraction] | None:
-    """The solution of the square system ``a x = b``, or ``None`` if ``a`` is singular."""
-    n = len(b)
-    m = [[*row, b[i]] for i, row in enumerate(a)]
-    for col in range(n):
-        piv = next((r for r in range(col, n) if m[r][col] != 0), None)
-        if piv is None:
-            return None
-        m[col], m[piv] = m[piv], m[col]
-        p = m[col][col]
-        m[col] = [x / p for x in m[col]]
-        for r in range(n):
-            if r != col and m[r][col] != 0:
-                f = m[r][col]
-                m[r] = [x - f * y for x, y in zip(m[r], m[col], strict=True)]
-    return [m[i][n] for i in range(n)]
 
 
 def _dist(mdp, x: int, u: int, labels=None) -> dict[int, Fraction]:
