@@ -168,3 +168,24 @@ def test_progress_callback_and_interrupt_propagates():
 def test_unknown_arithmetic_is_a_validation_error():
     with pytest.raises(ValidationError, match="arithmetic"):
         lb.solve_exact(lb.garnet(5, 2, 2, seed=0), arithmetic="exact")
+
+
+@pytest.mark.parametrize("solve", ["solve_game", "RLP", "NLP"])
+def test_every_entry_refuses_an_unknown_arithmetic_in_the_same_words(solve):
+    """solve_game, an LP formulation and the NLP name the argument and the choices alike
+    (one check, validation.check_choice), before any work."""
+    from lpbounds.formulations import NLP, RLP
+
+    mdp = lb.garnet(6, 2, 2, seed=0)
+    part = lb.random_partition(6, 2, seed=0)
+    call = {
+        "solve_game": lambda: lb.solve_game(
+            BellmanRows.aggregate(mdp, part, reduce="min"), arithmetic="exact"
+        ),
+        "RLP": lambda: RLP(mdp, part).solve("HIGHS", arithmetic="exact"),
+        "NLP": lambda: NLP(mdp, part).solve(arithmetic="exact"),
+    }[solve]
+    with pytest.raises(
+        ValidationError, match=r"arithmetic must be one of \['float', 'rational'\]; got 'exact'"
+    ):
+        call()

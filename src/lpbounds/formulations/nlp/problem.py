@@ -101,6 +101,7 @@ from ...model.partition import Partition
 from ...rows import BellmanRows
 from ...status import Status
 from ...tolerances import NLP_EXACT_RTOL, NLP_GAP_RTOL, NLP_MILP_GAP_RTOL, NLP_SWITCH_RTOL, dp_scale
+from ...validation import check_choice
 from ..base import aggregated_cost, resolve_solver
 from ..highs import silence_highs_banner
 from .results import NLPIteration, NLPResult
@@ -495,8 +496,7 @@ class NLP:
         if not (isinstance(gap_rtol, int | float) and np.isfinite(gap_rtol) and gap_rtol >= 0):
             raise ValidationError(f"gap_rtol must be a finite number >= 0; got {gap_rtol!r}")
         opts = _method_options(method, options)
-        if arithmetic not in ("float", "rational"):
-            raise ValidationError(f"arithmetic must be 'float' or 'rational'; got {arithmetic!r}")
+        check_choice("arithmetic", arithmetic, ("float", "rational"))
         t0 = time.perf_counter()
         with _progress_bar(progress, method, opts.get("max_iter")) as tick, threads_for(self.rows):
             if method == "cutting-planes":
