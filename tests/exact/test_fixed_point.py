@@ -170,11 +170,12 @@ def test_unknown_arithmetic_is_a_validation_error():
         lb.solve_exact(lb.garnet(5, 2, 2, seed=0), arithmetic="exact")
 
 
-@pytest.mark.parametrize("solve", ["solve_game", "RLP", "NLP"])
+@pytest.mark.parametrize("solve", ["solve_game", "RLP", "NLP", "run_verification"])
 def test_every_entry_refuses_an_unknown_arithmetic_in_the_same_words(solve):
-    """solve_game, an LP formulation and the NLP name the argument and the choices alike
-    (one check, validation.check_choice), before any work."""
+    """solve_game, an LP formulation, the NLP and verify name the argument and the choices
+    alike (one check, validation.check_choice), before any work."""
     from lpbounds.formulations import NLP, RLP
+    from lpbounds.studies.verify import run_verification
 
     mdp = lb.garnet(6, 2, 2, seed=0)
     part = lb.random_partition(6, 2, seed=0)
@@ -184,6 +185,7 @@ def test_every_entry_refuses_an_unknown_arithmetic_in_the_same_words(solve):
         ),
         "RLP": lambda: RLP(mdp, part).solve("HIGHS", arithmetic="exact"),
         "NLP": lambda: NLP(mdp, part).solve(arithmetic="exact"),
+        "run_verification": lambda: run_verification(arithmetic="exact"),
     }[solve]
     with pytest.raises(
         ValidationError, match=r"arithmetic must be one of \['float', 'rational'\]; got 'exact'"

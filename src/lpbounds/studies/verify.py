@@ -140,6 +140,7 @@ from ..model.partition import Partition
 from ..rows import BellmanRows
 from ..status import Verdict
 from ..tolerances import LP_COMPARE_RTOL, dp_scale
+from ..validation import check_choice
 
 __all__ = [
     "ARITHMETICS",
@@ -269,11 +270,7 @@ def check_arithmetic(arithmetic: Any) -> str:
     ValidationError
         For any other value (the message lists the known ones).
     """
-    if arithmetic not in ARITHMETICS:
-        raise ValidationError(
-            f"arithmetic: unknown arithmetic {arithmetic!r}; known: {', '.join(ARITHMETICS)}"
-        )
-    return str(arithmetic)
+    return check_choice("arithmetic", arithmetic, ARITHMETICS)
 
 
 def due_solvers(check: str, solvers: Sequence[str]) -> list[str]:
